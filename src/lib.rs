@@ -1,0 +1,6 @@
+//! kalos: a Monte-Carlo global illumination renderer.
+#![forbid(unsafe_code)]
+
+pub mod math;
+pub mod sampling;
+pub mod spectrum;

@@ -1,0 +1,8 @@
+//! Sampling: random streams (random or Owen-scrambled Sobol, independent or dependent)
+//! and warps from the unit square, each paired with its density.
+
+pub mod rng;
+pub mod warp;
+
+pub use rng::{SampleStream, SamplerConfig, SamplerKind};
+pub use warp::*;

@@ -1,0 +1,173 @@
+//! Random numbers as a pure function of (seed, stream, pixel, sample index, dimension).
+//!
+//! The image therefore does not depend on threads or scheduling. With `dependent` set
+//! the pixel is left out of the function: every pixel then uses the same random numbers
+//! for the same sample index, which is exactly the "dependent tests" of Csonka et al.
+//! `stream` separates phases (the independent phase of DTF uses another stream).
+
+/// Which low-level generator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SamplerKind {
+    /// A hash of the coordinates: independent uniform numbers.
+    Random,
+    /// Owen-scrambled Sobol (Burley 2020), scrambled per pixel.
+    Sobol,
+}
+
+impl SamplerKind {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "random" | "independent" => Some(SamplerKind::Random),
+            "sobol" => Some(SamplerKind::Sobol),
+            _ => None,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SamplerConfig {
+    pub kind: SamplerKind,
+    pub seed: u64,
+    /// Leave the pixel out of the random function (dependent tests).
+    pub dependent: bool,
+}
+
+impl Default for SamplerConfig {
+    fn default() -> Self {
+        SamplerConfig {
+            kind: SamplerKind::Random,
+            seed: 0,
+            dependent: false,
+        }
+    }
+}
+
+#[inline]
+pub fn mix64(mut z: u64) -> u64 {
+    // splitmix64 finaliser
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+#[inline]
+fn to_unit(x: u32) -> f32 {
+    // 24 high bits -> [0, 1)
+    (x >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// Dimensions past this use the hash even in Sobol mode.
+const SOBOL_DIMS: u32 = sobol_burley::NUM_DIMENSIONS;
+
+/// The random numbers of one sample of one pixel.
+#[derive(Clone, Copy, Debug)]
+pub struct SampleStream {
+    kind: SamplerKind,
+    key: u64,
+    index: u32,
+    dim: u32,
+}
+
+impl SampleStream {
+    /// Stream for `sample_index` of `pixel` (ignored when dependent) in `stream`.
+    #[inline]
+    pub fn new(cfg: &SamplerConfig, stream: u32, pixel: u32, sample_index: u32) -> Self {
+        let mut key = mix64(cfg.seed ^ 0x6b61_6c6f_7300_0000);
+        key = mix64(key ^ (stream as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        if !cfg.dependent {
+            key = mix64(key ^ ((pixel as u64) << 1 | 1));
+        }
+        SampleStream {
+            kind: cfg.kind,
+            key,
+            index: sample_index,
+            dim: 0,
+        }
+    }
+
+    /// Jump to a fixed dimension (so that each bounce uses the same dimensions).
+    #[inline]
+    pub fn set_dimension(&mut self, dim: u32) {
+        self.dim = dim;
+    }
+
+    #[inline]
+    pub fn dimension(&self) -> u32 {
+        self.dim
+    }
+
+    #[inline]
+    pub fn next_1d(&mut self) -> f32 {
+        let d = self.dim;
+        self.dim += 1;
+        match self.kind {
+            SamplerKind::Sobol if d < SOBOL_DIMS && self.index < (1 << 16) => {
+                sobol_burley::sample(self.index, d, self.key as u32).min(ONE_MINUS_EPS)
+            }
+            _ => {
+                let h = mix64(self.key ^ mix64(((self.index as u64) << 32) | d as u64));
+                to_unit(h as u32)
+            }
+        }
+    }
+
+    #[inline]
+    pub fn next_2d(&mut self) -> glam::Vec2 {
+        let a = self.next_1d();
+        let b = self.next_1d();
+        glam::Vec2::new(a, b)
+    }
+}
+
+pub const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pure_function_of_coordinates() {
+        let cfg = SamplerConfig::default();
+        let mut a = SampleStream::new(&cfg, 0, 17, 5);
+        let mut b = SampleStream::new(&cfg, 0, 17, 5);
+        for _ in 0..10 {
+            assert_eq!(a.next_1d(), b.next_1d());
+        }
+    }
+
+    #[test]
+    fn dependent_streams_ignore_the_pixel() {
+        for kind in [SamplerKind::Random, SamplerKind::Sobol] {
+            let dep = SamplerConfig { kind, seed: 3, dependent: true };
+            let ind = SamplerConfig { dependent: false, ..dep };
+            let mut a = SampleStream::new(&dep, 0, 1, 9);
+            let mut b = SampleStream::new(&dep, 0, 1000, 9);
+            let mut c = SampleStream::new(&ind, 0, 1, 9);
+            let mut d = SampleStream::new(&ind, 0, 1000, 9);
+            let (x, y, z, w) = (a.next_1d(), b.next_1d(), c.next_1d(), d.next_1d());
+            assert_eq!(x, y);
+            assert_ne!(z, w);
+            // streams (phases) are independent of each other
+            let mut e = SampleStream::new(&dep, 1, 1, 9);
+            assert_ne!(x, e.next_1d());
+        }
+    }
+
+    #[test]
+    fn uniform_mean_and_range() {
+        for kind in [SamplerKind::Random, SamplerKind::Sobol] {
+            let cfg = SamplerConfig { kind, seed: 1, dependent: false };
+            let mut sum = 0.0f64;
+            let n = 4096;
+            for i in 0..n {
+                let mut s = SampleStream::new(&cfg, 0, 7, i);
+                s.set_dimension(3);
+                let u = s.next_1d();
+                assert!((0.0..1.0).contains(&u));
+                sum += u as f64;
+            }
+            assert!((sum / n as f64 - 0.5).abs() < 0.01, "{kind:?}");
+        }
+    }
+}

@@ -1,0 +1,183 @@
+//! Warps from [0,1)^2 to directions and points, each with its pdf.
+//! Directions are in a local frame with the normal along +z.
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::{FRAC_1_PI, PI};
+
+/// Cosine-weighted hemisphere (Malley's method over a concentric disk).
+#[inline]
+pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
+    let d = square_to_concentric_disk(u);
+    let z = (1.0 - d.x * d.x - d.y * d.y).max(0.0).sqrt();
+    Vec3::new(d.x, d.y, z)
+}
+
+#[inline]
+pub fn pdf_cosine_hemisphere(w: Vec3) -> f32 {
+    if w.z > 0.0 {
+        w.z * FRAC_1_PI
+    } else {
+        0.0
+    }
+}
+
+/// Shirley-Chiu concentric map to the unit disk.
+#[inline]
+pub fn square_to_concentric_disk(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o.x == 0.0 && o.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, (PI / 4.0) * (o.y / o.x))
+    } else {
+        (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y))
+    };
+    Vec2::new(r * theta.cos(), r * theta.sin())
+}
+
+#[inline]
+pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+pub const PDF_UNIFORM_SPHERE: f32 = 1.0 / (4.0 * PI);
+
+/// Uniform point on a triangle, as barycentrics (b1, b2) of v1 and v2.
+#[inline]
+pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
+    let su = u.x.sqrt();
+    Vec2::new(1.0 - su, u.y * su)
+}
+
+/// Direction around +z with density (n + 1)/(2 pi) cos^n(alpha): the Phong lobe.
+#[inline]
+pub fn square_to_cos_power(u: Vec2, n: f32) -> Vec3 {
+    let cos_a = u.x.powf(1.0 / (n + 1.0));
+    let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(sin_a * phi.cos(), sin_a * phi.sin(), cos_a)
+}
+
+#[inline]
+pub fn pdf_cos_power(cos_a: f32, n: f32) -> f32 {
+    if cos_a <= 0.0 {
+        0.0
+    } else {
+        (n + 1.0) * (0.5 * FRAC_1_PI) * cos_a.powf(n)
+    }
+}
+
+/// Power heuristic with beta = 2 for one-sample MIS.
+#[inline]
+pub fn power_heuristic(pdf_a: f32, pdf_b: f32) -> f32 {
+    let a = pdf_a * pdf_a;
+    let b = pdf_b * pdf_b;
+    if a == 0.0 {
+        0.0
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        a / (a + b)
+    }
+}
+
+/// A discrete distribution sampled by inverting its CDF.
+#[derive(Clone, Debug, Default)]
+pub struct Distribution1D {
+    /// Normalised cumulative sums, cdf[i] = P(X < i), length n + 1.
+    cdf: Vec<f32>,
+    /// Probability of each entry.
+    pmf: Vec<f32>,
+    total: f64,
+}
+
+impl Distribution1D {
+    /// From non-negative weights; all-zero weights give an empty distribution.
+    pub fn new(weights: &[f32]) -> Self {
+        let total: f64 = weights.iter().map(|&w| w.max(0.0) as f64).sum();
+        if total <= 0.0 || !total.is_finite() {
+            return Distribution1D {
+                cdf: vec![0.0],
+                pmf: vec![0.0; weights.len()],
+                total: 0.0,
+            };
+        }
+        let mut cdf = Vec::with_capacity(weights.len() + 1);
+        let mut pmf = Vec::with_capacity(weights.len());
+        let mut acc = 0.0f64;
+        cdf.push(0.0);
+        for &w in weights {
+            let w = w.max(0.0) as f64;
+            acc += w;
+            cdf.push((acc / total) as f32);
+            pmf.push((w / total) as f32);
+        }
+        *cdf.last_mut().unwrap() = 1.0;
+        Distribution1D { cdf, pmf, total }
+    }
+    pub fn is_empty(&self) -> bool {
+        self.total == 0.0
+    }
+    pub fn len(&self) -> usize {
+        self.pmf.len()
+    }
+    pub fn total(&self) -> f64 {
+        self.total
+    }
+    #[inline]
+    pub fn pmf(&self, i: usize) -> f32 {
+        self.pmf[i]
+    }
+    /// Returns (index, pmf, u rescaled to [0,1) within the chosen entry).
+    #[inline]
+    pub fn sample(&self, u: f32) -> (usize, f32, f32) {
+        // first index with cdf[i+1] > u
+        let n = self.pmf.len();
+        let mut lo = 0usize;
+        let mut hi = n;
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if self.cdf[mid + 1] <= u {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        let i = lo.min(n - 1);
+        let p = self.pmf[i];
+        let ur = if p > 0.0 {
+            ((u - self.cdf[i]) / p).clamp(0.0, super::rng::ONE_MINUS_EPS)
+        } else {
+            0.0
+        };
+        (i, p, ur)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn distribution_samples_in_proportion() {
+        let d = Distribution1D::new(&[1.0, 0.0, 3.0]);
+        let mut counts = [0usize; 3];
+        for i in 0..4000 {
+            let (k, p, ur) = d.sample((i as f32 + 0.5) / 4000.0);
+            assert!(p > 0.0 && (0.0..1.0).contains(&ur));
+            counts[k] += 1;
+        }
+        assert_eq!(counts[1], 0);
+        assert!((counts[0] as f32 / 4000.0 - 0.25).abs() < 0.01);
+    }
+
+    #[test]
+    fn empty_distribution() {
+        let d = Distribution1D::new(&[0.0, 0.0]);
+        assert!(d.is_empty());
+    }
+}
