@@ -1,6 +1,8 @@
 //! kalos: a Monte-Carlo global illumination renderer.
 #![forbid(unsafe_code)]
 
+pub mod film;
+pub mod image_io;
 pub mod math;
 pub mod sampling;
 pub mod spectrum;

@@ -139,8 +139,15 @@ mod tests {
     #[test]
     fn dependent_streams_ignore_the_pixel() {
         for kind in [SamplerKind::Random, SamplerKind::Sobol] {
-            let dep = SamplerConfig { kind, seed: 3, dependent: true };
-            let ind = SamplerConfig { dependent: false, ..dep };
+            let dep = SamplerConfig {
+                kind,
+                seed: 3,
+                dependent: true,
+            };
+            let ind = SamplerConfig {
+                dependent: false,
+                ..dep
+            };
             let mut a = SampleStream::new(&dep, 0, 1, 9);
             let mut b = SampleStream::new(&dep, 0, 1000, 9);
             let mut c = SampleStream::new(&ind, 0, 1, 9);
@@ -157,7 +164,11 @@ mod tests {
     #[test]
     fn uniform_mean_and_range() {
         for kind in [SamplerKind::Random, SamplerKind::Sobol] {
-            let cfg = SamplerConfig { kind, seed: 1, dependent: false };
+            let cfg = SamplerConfig {
+                kind,
+                seed: 1,
+                dependent: false,
+            };
             let mut sum = 0.0f64;
             let n = 4096;
             for i in 0..n {

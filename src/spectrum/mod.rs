@@ -257,7 +257,10 @@ mod tests {
             let s = Spectrum::<N>::from_rgb(rgb);
             let back = s.to_rgb();
             for c in 0..3 {
-                assert!((back[c] - rgb[c]).abs() < 1e-4 * rgb[c].max(1.0), "{N}: {rgb:?} -> {back:?}");
+                assert!(
+                    (back[c] - rgb[c]).abs() < 1e-4 * rgb[c].max(1.0),
+                    "{N}: {rgb:?} -> {back:?}"
+                );
             }
         }
     }
@@ -285,7 +288,12 @@ mod tests {
     }
 
     fn bounded<const N: usize>() {
-        for rgb in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.3, 0.9, 0.1]] {
+        for rgb in [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.3, 0.9, 0.1],
+        ] {
             let s = Spectrum::<N>::from_rgb(rgb);
             for v in s.0 {
                 assert!((-1e-6..=1.0 + 1e-6).contains(&v), "{N}: {rgb:?} -> {s:?}");

@@ -1,0 +1,314 @@
+//! Image files by extension: `.exr` (linear float, optional extra layers), `.pfm`
+//! (linear float), `.png` (exposure + sRGB transfer, 8 bit). Reading supports the same
+//! three, so `compare` and references work with any of them.
+
+use std::path::Path;
+
+/// A linear RGB image, row-major, y = 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<[f32; 3]>,
+}
+
+impl RgbImage {
+    pub fn new(width: u32, height: u32, data: Vec<[f32; 3]>) -> Self {
+        assert_eq!(data.len(), width as usize * height as usize);
+        RgbImage {
+            width,
+            height,
+            data,
+        }
+    }
+    pub fn get(&self, x: u32, y: u32) -> [f32; 3] {
+        self.data[y as usize * self.width as usize + x as usize]
+    }
+    pub fn mean(&self) -> [f64; 3] {
+        let mut s = [0.0f64; 3];
+        for p in &self.data {
+            for c in 0..3 {
+                s[c] += p[c] as f64;
+            }
+        }
+        let n = self.data.len().max(1) as f64;
+        [s[0] / n, s[1] / n, s[2] / n]
+    }
+}
+
+/// An extra single- or three-channel layer written beside the main image in EXR.
+pub struct ExtraLayer<'a> {
+    pub name: &'a str,
+    pub channels: LayerData<'a>,
+}
+
+pub enum LayerData<'a> {
+    Rgb(&'a [[f32; 3]]),
+    Mono(&'a [f32]),
+}
+
+/// Output format chosen from a file name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Exr,
+    Pfm,
+    Png,
+}
+
+pub fn format_of(path: &Path) -> Result<Format, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("exr") => Ok(Format::Exr),
+        Some("pfm") => Ok(Format::Pfm),
+        Some("png") => Ok(Format::Png),
+        _ => Err(format!(
+            "{}: unknown image extension (use .exr, .pfm or .png)",
+            path.display()
+        )),
+    }
+}
+
+/// Write an image; `exposure` (in stops) applies to PNG only; extra layers go to EXR only.
+pub fn write_image(
+    path: &Path,
+    img: &RgbImage,
+    exposure: f32,
+    extra: &[ExtraLayer],
+) -> Result<(), String> {
+    let fail = |e: &dyn std::fmt::Display| format!("{}: cannot write image: {e}", path.display());
+    match format_of(path)? {
+        Format::Exr => write_exr(path, img, extra).map_err(|e| fail(&e)),
+        Format::Pfm => write_pfm(path, img).map_err(|e| fail(&e)),
+        Format::Png => write_png(path, img, exposure).map_err(|e| fail(&e)),
+    }
+}
+
+fn write_exr(path: &Path, img: &RgbImage, extra: &[ExtraLayer]) -> Result<(), exr::error::Error> {
+    use exr::prelude::*;
+    let size = (img.width as usize, img.height as usize);
+    let plane = |c: usize| -> Vec<f32> { img.data.iter().map(|p| p[c]).collect() };
+    let mut channels: Vec<AnyChannel<FlatSamples>> = vec![
+        AnyChannel::new("R", FlatSamples::F32(plane(0))),
+        AnyChannel::new("G", FlatSamples::F32(plane(1))),
+        AnyChannel::new("B", FlatSamples::F32(plane(2))),
+    ];
+    // Extra layers use the EXR naming convention "layer.channel" in the same part.
+    for l in extra {
+        match &l.channels {
+            LayerData::Rgb(d) => {
+                for (c, ch) in ["R", "G", "B"].iter().enumerate() {
+                    let v: Vec<f32> = d.iter().map(|p| p[c]).collect();
+                    channels.push(AnyChannel::new(
+                        format!("{}.{}", l.name, ch).as_str(),
+                        FlatSamples::F32(v),
+                    ));
+                }
+            }
+            LayerData::Mono(d) => {
+                channels.push(AnyChannel::new(
+                    format!("{}.Y", l.name).as_str(),
+                    FlatSamples::F32(d.to_vec()),
+                ));
+            }
+        }
+    }
+    let layer = Layer::new(
+        size,
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
+    Image::from_layer(layer).write().to_file(path)
+}
+
+fn write_pfm(path: &Path, img: &RgbImage) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut out = Vec::with_capacity(img.data.len() * 12 + 32);
+    // Negative scale: little endian. Rows go bottom to top.
+    write!(out, "PF\n{} {}\n-1.0\n", img.width, img.height)?;
+    for y in (0..img.height).rev() {
+        for x in 0..img.width {
+            for v in img.get(x, y) {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    std::fs::write(path, out)
+}
+
+/// sRGB transfer function of a linear value in [0, 1].
+pub fn srgb_encode(v: f32) -> f32 {
+    if v <= 0.0031308 {
+        12.92 * v.max(0.0)
+    } else {
+        1.055 * v.min(1.0).powf(1.0 / 2.4) - 0.055
+    }
+}
+
+pub fn srgb_decode(v: f32) -> f32 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> image::ImageResult<()> {
+    let k = 2f32.powf(exposure);
+    let mut buf = Vec::with_capacity(img.data.len() * 3);
+    for p in &img.data {
+        for v in p {
+            buf.push((srgb_encode(v * k).clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
+        }
+    }
+    image::save_buffer(
+        path,
+        &buf,
+        img.width,
+        img.height,
+        image::ExtendedColorType::Rgb8,
+    )
+}
+
+/// Read an EXR (first RGB(A) layer), PFM or PNG (sRGB-decoded) as linear RGB.
+pub fn read_image(path: &Path) -> Result<RgbImage, String> {
+    let fail = |e: &dyn std::fmt::Display| format!("{}: cannot read image: {e}", path.display());
+    if !path.exists() {
+        return Err(format!("{}: no such file", path.display()));
+    }
+    match format_of(path)? {
+        Format::Exr => read_exr(path).map_err(|e| fail(&e)),
+        Format::Pfm => read_pfm(path).map_err(|e| fail(&e)),
+        Format::Png => {
+            let im = image::open(path).map_err(|e| fail(&e))?.to_rgb32f();
+            let (w, h) = im.dimensions();
+            let data = im
+                .pixels()
+                .map(|p| [srgb_decode(p[0]), srgb_decode(p[1]), srgb_decode(p[2])])
+                .collect();
+            Ok(RgbImage::new(w, h, data))
+        }
+    }
+}
+
+fn read_exr(path: &Path) -> Result<RgbImage, exr::error::Error> {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0.0f32; 3]; res.width() * res.height()]),
+        |(w, data), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            data[pos.y() * *w + pos.x()] = [r, g, b];
+        },
+    )?;
+    let size = image.layer_data.size;
+    let (_, data) = image.layer_data.channel_data.pixels;
+    Ok(RgbImage::new(
+        size.width() as u32,
+        size.height() as u32,
+        data,
+    ))
+}
+
+fn read_pfm(path: &Path) -> Result<RgbImage, String> {
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    // header: 3 whitespace-separated tokens after the magic, then one whitespace byte
+    let mut pos = 0;
+    let mut tokens = Vec::new();
+    while tokens.len() < 4 {
+        while pos < bytes.len() && bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        let start = pos;
+        while pos < bytes.len() && !bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        if start == pos {
+            return Err("truncated PFM header".into());
+        }
+        tokens.push(String::from_utf8_lossy(&bytes[start..pos]).to_string());
+    }
+    pos += 1;
+    let channels = match tokens[0].as_str() {
+        "PF" => 3,
+        "Pf" => 1,
+        t => return Err(format!("not a PFM file (magic {t:?})")),
+    };
+    let w: u32 = tokens[1].parse().map_err(|_| "bad PFM width")?;
+    let h: u32 = tokens[2].parse().map_err(|_| "bad PFM height")?;
+    let scale: f32 = tokens[3].parse().map_err(|_| "bad PFM scale")?;
+    let n = w as usize * h as usize * channels;
+    if bytes.len() < pos + n * 4 {
+        return Err("PFM file is shorter than its header says".into());
+    }
+    let rd = |i: usize| {
+        let b = [
+            bytes[pos + 4 * i],
+            bytes[pos + 4 * i + 1],
+            bytes[pos + 4 * i + 2],
+            bytes[pos + 4 * i + 3],
+        ];
+        if scale < 0.0 {
+            f32::from_le_bytes(b)
+        } else {
+            f32::from_be_bytes(b)
+        }
+    };
+    let mut data = vec![[0.0f32; 3]; w as usize * h as usize];
+    for y in 0..h as usize {
+        for x in 0..w as usize {
+            let src = ((h as usize - 1 - y) * w as usize + x) * channels;
+            data[y * w as usize + x] = if channels == 3 {
+                [rd(src), rd(src + 1), rd(src + 2)]
+            } else {
+                [rd(src); 3]
+            };
+        }
+    }
+    Ok(RgbImage::new(w, h, data))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample_image() -> RgbImage {
+        let data = (0..6)
+            .map(|i| [i as f32 * 0.25, 1.5, -0.0 + i as f32])
+            .collect();
+        RgbImage::new(3, 2, data)
+    }
+
+    #[test]
+    fn exr_and_pfm_round_trip() {
+        let dir = std::env::temp_dir().join(format!("kalos-io-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let img = sample_image();
+        for name in ["a.exr", "a.pfm"] {
+            let p = dir.join(name);
+            let var = vec![[1.0f32; 3]; 6];
+            let cnt = vec![4.0f32; 6];
+            let extra = [
+                ExtraLayer {
+                    name: "variance",
+                    channels: LayerData::Rgb(&var),
+                },
+                ExtraLayer {
+                    name: "count",
+                    channels: LayerData::Mono(&cnt),
+                },
+            ];
+            write_image(&p, &img, 0.0, &extra).unwrap();
+            assert_eq!(read_image(&p).unwrap(), img, "{name}");
+        }
+        let p = dir.join("a.png");
+        write_image(&p, &img, 0.0, &[]).unwrap();
+        let back = read_image(&p).unwrap();
+        assert_eq!((back.width, back.height), (3, 2));
+        assert!((back.get(1, 0)[0] - 0.25).abs() < 0.01);
+        assert!(read_image(&dir.join("missing.exr")).is_err());
+        assert!(format_of(Path::new("x.tga")).is_err());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
