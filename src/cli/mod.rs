@@ -1,0 +1,78 @@
+//! The command line: `kalos render|scenes|info`. Parsing lives here; the work is done
+//! by the library. Every error is one line naming the file, line or option at fault.
+
+pub mod render;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser, Debug)]
+#[command(name = "kalos", version, about = "A Monte-Carlo global illumination renderer", long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene (built-in name, .obj or .toml) to an image.
+    Render(render::RenderArgs),
+    /// List the built-in scenes.
+    Scenes,
+    /// Print triangles, materials, emitters, bounds and load/BVH times of a scene.
+    Info {
+        /// Built-in scene name, .obj or .toml file.
+        scene: String,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// Run the CLI; Err is a one-line message for stderr.
+pub fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Render(args) => render::run(args),
+        Command::Scenes => {
+            for (name, what) in crate::scene::builtin::describe() {
+                println!("{name:<10} {what}");
+            }
+            Ok(())
+        }
+        Command::Info { scene, json } => {
+            let s = crate::scene::load(&scene)?;
+            for w in &s.warnings {
+                eprintln!("kalos: warning: {w}");
+            }
+            let i = &s.info;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(i).map_err(|e| e.to_string())?
+                );
+            } else {
+                println!("scene        {}", i.name);
+                println!("triangles    {}", i.triangles);
+                println!("materials    {}", i.materials);
+                println!("emitters     {} triangles", i.emitters);
+                println!("skipped      {} zero-area faces", i.skipped_degenerate);
+                println!(
+                    "bounds       [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]",
+                    i.bounds_min[0],
+                    i.bounds_min[1],
+                    i.bounds_min[2],
+                    i.bounds_max[0],
+                    i.bounds_max[1],
+                    i.bounds_max[2]
+                );
+                println!("load         {:.3} s", i.load_seconds);
+                println!(
+                    "bvh          {:.3} s, {} nodes, {:.1} MiB",
+                    i.bvh_seconds,
+                    i.bvh_nodes,
+                    i.bvh_bytes as f64 / 1048576.0
+                );
+            }
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,152 @@
+//! Unidirectional path tracer with next-event estimation and multiple importance sampling
+//! (power heuristic) between light sampling and BSDF sampling.
+//!
+//! Depth follows Mitsuba's max_depth: a path of k segments is allowed if k <= max_depth,
+//! so 1 gives emitters seen directly and 2 direct lighting. Random dimensions are fixed
+//! per bounce (2 for the pixel, then `DIMS_PER_BOUNCE` each), so a dimension means the
+//! same decision in every sample, which dependent tests and Sobol both rely on.
+
+use super::camera_ray;
+use super::{intersect, Counters, IntegratorSettings};
+use crate::math::{offset_origin, Frame, Ray};
+use crate::sampling::{power_heuristic, SampleStream};
+use crate::scene::Scene;
+use crate::spectrum::Spectrum;
+
+pub const DIMS_CAMERA: u32 = 2;
+pub const DIMS_PER_BOUNCE: u32 = 8;
+
+/// Radiance arriving along `ray` (one sample).
+pub fn radiance<const N: usize>(
+    scene: &Scene,
+    mut ray: Ray,
+    s: &mut SampleStream,
+    set: &IntegratorSettings,
+    c: &mut Counters,
+) -> Spectrum<N> {
+    let mut l = Spectrum::<N>::ZERO;
+    let mut beta = Spectrum::<N>::ONE;
+    // Solid-angle pdf of the last BSDF sample, and whether it was a delta lobe
+    // (the camera ray counts as delta: emitters seen directly get full weight).
+    let mut prev_pdf = 0.0f32;
+    let mut prev_delta = true;
+    let max_segments = set.max_segments();
+    let mut segments = 0u32;
+    c.paths += 1;
+    loop {
+        c.rays += 1;
+        let Some(hit) = intersect(scene, &ray, f32::INFINITY) else {
+            break;
+        };
+        segments += 1;
+        let mat = scene.material_of(hit.prim);
+        let wo = -ray.d;
+
+        // Emission (one-sided: the counter-clockwise side), MIS-weighted against NEE.
+        if mat.is_emissive() && wo.dot(hit.ng) > 0.0 {
+            let le = Spectrum::<N>::from_rgb(mat.emission);
+            let w = if prev_delta {
+                1.0
+            } else {
+                let li = scene.lights.light_of(hit.prim).unwrap_or(0);
+                let cos_l = wo.dot(hit.ng);
+                let pdf_light = scene.lights.pdf_position(li) * hit.t * hit.t / cos_l;
+                power_heuristic(prev_pdf, pdf_light)
+            };
+            l += beta * le * w;
+        }
+        if segments >= max_segments {
+            break;
+        }
+
+        // The BSDF at the hit, textured, in a frame facing wo for two-sided materials.
+        let mut bsdf = mat.bsdf;
+        if let Some(t) = mat.kd_texture {
+            let kd = scene.textures[t as usize].lookup(hit.uv.x, hit.uv.y);
+            bsdf = bsdf.with_kd(kd);
+        }
+        let (ng, ns) = if bsdf.is_two_sided() && wo.dot(hit.ng) < 0.0 {
+            (-hit.ng, -hit.ns)
+        } else {
+            (hit.ng, hit.ns)
+        };
+        let frame = Frame::from_normal(ns);
+        let wo_l = frame.to_local(wo);
+
+        s.set_dimension(DIMS_CAMERA + (segments - 1) * DIMS_PER_BOUNCE);
+        let u_sel = s.next_1d();
+        let u_light = s.next_2d();
+        let u_lobe = s.next_1d();
+        let u_bsdf = s.next_2d();
+        let u_rr = s.next_1d();
+
+        // Next-event estimation.
+        if !bsdf.is_delta() {
+            if let Some(ls) = scene.lights.sample_position(u_sel, u_light) {
+                let d = ls.p - hit.p;
+                let dist2 = d.length_squared();
+                let dist = dist2.sqrt();
+                let wi = d / dist;
+                let cos_l = -wi.dot(ls.n);
+                let wi_l = frame.to_local(wi);
+                if cos_l > 0.0 && wi_l.z > 0.0 && wi.dot(ng) > 0.0 {
+                    let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z;
+                    if !f.is_black() {
+                        let o = offset_origin(hit.p, ng, wi);
+                        let to = ls.p - o;
+                        c.rays += 1;
+                        if !scene.bvh.occluded(&Ray::new(o, to), 1.0 - 1e-4) {
+                            let pdf_light = ls.pdf_area * dist2 / cos_l;
+                            let w = power_heuristic(pdf_light, bsdf.pdf(wo_l, wi_l));
+                            l += beta * f * Spectrum::from_rgb(ls.le) * (w / pdf_light);
+                        }
+                    }
+                }
+            }
+        }
+
+        // Continue the path by sampling the BSDF.
+        let Some(bs) = bsdf.sample::<N>(wo_l, u_lobe, u_bsdf) else {
+            break;
+        };
+        let wi = frame.to_world(bs.wi);
+        // Shading normals must not let light through the geometric surface.
+        if (wi.dot(ng) > 0.0) != (bs.wi.z > 0.0) {
+            break;
+        }
+        beta *= bs.weight;
+
+        // Russian roulette (integrator/rr.rs).
+        let q = set
+            .roulette
+            .continuation::<N>(segments - 1, &bsdf.albedo::<N>());
+        if q < 1.0 {
+            if u_rr >= q {
+                break;
+            }
+            beta *= 1.0 / q;
+        }
+        if beta.is_black() {
+            break;
+        }
+        prev_pdf = bs.pdf;
+        prev_delta = bs.delta;
+        ray = Ray::new(offset_origin(hit.p, ng, wi), wi);
+    }
+    l
+}
+
+/// One sample of pixel (x, y): linear RGB.
+#[inline]
+pub fn sample_pixel<const N: usize>(
+    scene: &Scene,
+    cam: &crate::scene::Camera,
+    x: u32,
+    y: u32,
+    s: &mut SampleStream,
+    set: &IntegratorSettings,
+    c: &mut Counters,
+) -> [f32; 3] {
+    let ray = camera_ray(cam, x, y, s);
+    radiance::<N>(scene, ray, s, set, c).to_rgb()
+}

@@ -1,0 +1,151 @@
+//! Emitters: every triangle whose material has emission Ke > 0 is a one-sided area light
+//! on the side its counter-clockwise winding faces. Lights are chosen in proportion to
+//! their power (luminance of Le x area x pi). Emission sampling is split into a position
+//! (density per area) and a direction (cosine-weighted, per solid angle), as light
+//! tracing, BDPT and radiosity shooting need.
+
+use crate::math::{Frame, Vec3};
+use crate::sampling::{square_to_cosine_hemisphere, square_to_uniform_triangle, Distribution1D};
+use crate::scene::Material;
+use glam::Vec2;
+
+/// One emissive triangle.
+#[derive(Clone, Copy, Debug)]
+pub struct AreaLight {
+    pub tri: u32,
+    pub v0: Vec3,
+    pub e1: Vec3,
+    pub e2: Vec3,
+    /// Unit normal of the emitting side.
+    pub n: Vec3,
+    pub area: f32,
+    /// Emitted radiance, linear RGB.
+    pub le: [f32; 3],
+}
+
+/// A point sampled on an emitter.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    pub p: Vec3,
+    pub n: Vec3,
+    pub le: [f32; 3],
+    /// Density per unit area, including the choice of the light.
+    pub pdf_area: f32,
+    pub light: u32,
+}
+
+pub struct Lights {
+    lights: Vec<AreaLight>,
+    dist: Distribution1D,
+    /// For each scene triangle, its light index or u32::MAX.
+    light_of_tri: Vec<u32>,
+}
+
+impl Lights {
+    pub fn new(tris: &[[Vec3; 3]], tri_material: &[u32], materials: &[Material]) -> Lights {
+        let mut lights = Vec::new();
+        let mut light_of_tri = vec![u32::MAX; tris.len()];
+        for (i, t) in tris.iter().enumerate() {
+            let m = &materials[tri_material[i] as usize];
+            if !m.is_emissive() {
+                continue;
+            }
+            let e1 = t[1] - t[0];
+            let e2 = t[2] - t[0];
+            let c = e1.cross(e2);
+            let area = 0.5 * c.length();
+            if area <= 0.0 || !area.is_finite() {
+                continue;
+            }
+            light_of_tri[i] = lights.len() as u32;
+            lights.push(AreaLight {
+                tri: i as u32,
+                v0: t[0],
+                e1,
+                e2,
+                n: c.normalize(),
+                area,
+                le: m.emission,
+            });
+        }
+        let power: Vec<f32> = lights
+            .iter()
+            .map(|l| {
+                crate::spectrum::Spectrum::<3>(l.le).luminance().max(1e-9)
+                    * l.area
+                    * std::f32::consts::PI
+            })
+            .collect();
+        Lights {
+            dist: Distribution1D::new(&power),
+            lights,
+            light_of_tri,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.lights.is_empty()
+    }
+    pub fn len(&self) -> usize {
+        self.lights.len()
+    }
+    pub fn get(&self, i: u32) -> &AreaLight {
+        &self.lights[i as usize]
+    }
+    pub fn all(&self) -> &[AreaLight] {
+        &self.lights
+    }
+    /// Total emitted power (sum of Le x area x pi), per RGB channel.
+    pub fn total_power_rgb(&self) -> [f64; 3] {
+        let mut p = [0.0f64; 3];
+        for l in &self.lights {
+            for c in 0..3 {
+                p[c] += l.le[c] as f64 * l.area as f64 * std::f64::consts::PI;
+            }
+        }
+        p
+    }
+
+    /// Light index of scene triangle `prim`, if it emits.
+    #[inline]
+    pub fn light_of(&self, prim: u32) -> Option<u32> {
+        let l = self.light_of_tri[prim as usize];
+        (l != u32::MAX).then_some(l)
+    }
+
+    /// Sample a light by power, then a point uniformly on it.
+    #[inline]
+    pub fn sample_position(&self, u_sel: f32, u: Vec2) -> Option<LightSample> {
+        if self.lights.is_empty() {
+            return None;
+        }
+        let (i, pmf, _) = self.dist.sample(u_sel);
+        let l = &self.lights[i];
+        let b = square_to_uniform_triangle(u);
+        let p = l.v0 + l.e1 * b.x + l.e2 * b.y;
+        Some(LightSample {
+            p,
+            n: l.n,
+            le: l.le,
+            pdf_area: pmf / l.area,
+            light: i as u32,
+        })
+    }
+
+    /// Density per unit area with which `sample_position` produces a point on light `i`.
+    #[inline]
+    pub fn pdf_position(&self, i: u32) -> f32 {
+        let l = &self.lights[i as usize];
+        self.dist.pmf(i as usize) / l.area
+    }
+
+    /// An emission direction from light `i` (cosine-weighted about its normal) and its
+    /// solid-angle density.
+    #[inline]
+    pub fn sample_direction(&self, i: u32, u: Vec2) -> (Vec3, f32) {
+        let l = &self.lights[i as usize];
+        let local = square_to_cosine_hemisphere(u);
+        let d = Frame::from_normal(l.n).to_world(local);
+        (d, local.z * std::f32::consts::FRAC_1_PI)
+    }
+}

@@ -1,0 +1,48 @@
+//! Lambertian reflection: f = kd / pi, sampled with the cosine-weighted hemisphere.
+
+use super::BsdfSample;
+use crate::sampling::{pdf_cosine_hemisphere, square_to_cosine_hemisphere};
+use crate::spectrum::Spectrum;
+use glam::{Vec2, Vec3};
+use std::f32::consts::FRAC_1_PI;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lambert {
+    pub kd: [f32; 3],
+}
+
+impl Lambert {
+    #[inline]
+    pub fn eval<const N: usize>(&self, wo: Vec3, wi: Vec3) -> Spectrum<N> {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Spectrum::ZERO;
+        }
+        Spectrum::from_rgb(self.kd) * FRAC_1_PI
+    }
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 {
+            return 0.0;
+        }
+        pdf_cosine_hemisphere(wi)
+    }
+    #[inline]
+    pub fn sample_dir(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let wi = square_to_cosine_hemisphere(u);
+        (wi.z > 0.0).then_some(wi)
+    }
+    #[inline]
+    pub fn sample<const N: usize>(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample<N>> {
+        let wi = self.sample_dir(wo, u)?;
+        // f cos / pdf = (kd/pi) cos / (cos/pi) = kd
+        Some(BsdfSample {
+            wi,
+            weight: Spectrum::from_rgb(self.kd),
+            pdf: pdf_cosine_hemisphere(wi),
+            delta: false,
+        })
+    }
+}

@@ -1,0 +1,227 @@
+//! BSDFs in a local shading frame (normal = +z; wo and wi point away from the surface).
+//!
+//! Each BSDF is a small `Copy` struct with `eval`, `pdf` and `sample` in pairs; `Bsdf` is
+//! the enum the integrators match on. Combined BRDFs (diffuse + normalized Phong, the
+//! combined BRDF of the Russian-roulette paper) keep their elementary lobes visible:
+//! `Bsdf::lobes` gives each lobe with its own sample/pdf/albedo, so a roulette or a
+//! lobe-selection strategy can choose among them.
+
+pub mod dielectric;
+pub mod lambert;
+pub mod mirror;
+pub mod phong;
+
+pub use dielectric::Dielectric;
+pub use lambert::Lambert;
+pub use mirror::Mirror;
+pub use phong::Phong;
+
+use crate::spectrum::Spectrum;
+use glam::{Vec2, Vec3};
+
+/// Result of sampling a direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample<const N: usize> {
+    pub wi: Vec3,
+    /// f * |cos theta_i| / pdf (for delta lobes: the lobe's weight).
+    pub weight: Spectrum<N>,
+    /// Solid-angle density of wi (1 for a delta lobe by convention).
+    pub pdf: f32,
+    /// The sampled direction came from a Dirac delta lobe.
+    pub delta: bool,
+}
+
+/// An elementary lobe of a combined BRDF.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lobe {
+    Diffuse(Lambert),
+    Glossy(Phong),
+}
+
+impl Lobe {
+    #[inline]
+    pub fn eval<const N: usize>(&self, wo: Vec3, wi: Vec3) -> Spectrum<N> {
+        match self {
+            Lobe::Diffuse(l) => l.eval(wo, wi),
+            Lobe::Glossy(p) => p.eval(wo, wi),
+        }
+    }
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Lobe::Diffuse(l) => l.pdf(wo, wi),
+            Lobe::Glossy(p) => p.pdf(wo, wi),
+        }
+    }
+    /// A direction from this lobe's own density (None if it fell below the surface).
+    #[inline]
+    pub fn sample_dir(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {
+        match self {
+            Lobe::Diffuse(l) => l.sample_dir(wo, u),
+            Lobe::Glossy(p) => p.sample_dir(wo, u),
+        }
+    }
+    /// Reflectance parameter of the lobe (kd or ks): an upper bound of its albedo.
+    #[inline]
+    pub fn albedo_rgb(&self) -> [f32; 3] {
+        match self {
+            Lobe::Diffuse(l) => l.kd,
+            Lobe::Glossy(p) => p.ks,
+        }
+    }
+}
+
+/// The scattering model of a surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bsdf {
+    /// Absorbs everything (e.g. a pure emitter with Kd = 0).
+    Black,
+    Diffuse(Lambert),
+    /// Sum of a diffuse and a normalized Phong lobe.
+    DiffuseGlossy(Lambert, Phong),
+    Mirror(Mirror),
+    Dielectric(Dielectric),
+}
+
+/// Luminance of an RGB triple (lobe selection weights).
+#[inline]
+fn lum(c: [f32; 3]) -> f32 {
+    crate::spectrum::Spectrum::<3>(c).luminance().max(0.0)
+}
+
+impl Bsdf {
+    /// A BSDF from MTL-style parameters. `illum` 5 = mirror, 7 = glass.
+    pub fn from_mtl(kd: [f32; 3], ks: [f32; 3], ns: f32, ni: f32, illum: u8) -> Bsdf {
+        match illum {
+            5 => Bsdf::Mirror(Mirror {
+                ks: if ks == [0.0; 3] { [1.0; 3] } else { ks },
+            }),
+            7 => Bsdf::Dielectric(Dielectric {
+                eta: if ni > 0.0 { ni } else { 1.5 },
+            }),
+            _ => {
+                let d = kd != [0.0; 3];
+                let g = ks != [0.0; 3];
+                match (d, g) {
+                    (false, false) => Bsdf::Black,
+                    (true, false) => Bsdf::Diffuse(Lambert { kd }),
+                    (_, true) => Bsdf::DiffuseGlossy(Lambert { kd }, Phong { ks, n: ns.max(0.0) }),
+                }
+            }
+        }
+    }
+
+    /// Replace the diffuse reflectance (texture lookups).
+    #[inline]
+    pub fn with_kd(self, kd: [f32; 3]) -> Bsdf {
+        match self {
+            Bsdf::Diffuse(_) => Bsdf::Diffuse(Lambert { kd }),
+            Bsdf::DiffuseGlossy(_, p) => Bsdf::DiffuseGlossy(Lambert { kd }, p),
+            b => b,
+        }
+    }
+
+    /// Opaque BSDFs are two-sided (the frame is flipped towards wo); glass is not.
+    #[inline]
+    pub fn is_two_sided(&self) -> bool {
+        !matches!(self, Bsdf::Dielectric(_))
+    }
+
+    /// Only Dirac lobes: next-event estimation is useless here.
+    #[inline]
+    pub fn is_delta(&self) -> bool {
+        matches!(self, Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Black)
+    }
+
+    /// Elementary lobes and their count.
+    #[inline]
+    pub fn lobe_array(&self) -> ([Lobe; 2], usize) {
+        let zero = Lobe::Diffuse(Lambert { kd: [0.0; 3] });
+        match *self {
+            Bsdf::Diffuse(l) => ([Lobe::Diffuse(l), zero], 1),
+            Bsdf::DiffuseGlossy(l, p) => ([Lobe::Diffuse(l), Lobe::Glossy(p)], 2),
+            _ => ([zero, zero], 0),
+        }
+    }
+
+    /// f(wo, wi) (without the cosine).
+    #[inline]
+    pub fn eval<const N: usize>(&self, wo: Vec3, wi: Vec3) -> Spectrum<N> {
+        match self {
+            Bsdf::Diffuse(l) => l.eval(wo, wi),
+            Bsdf::DiffuseGlossy(l, p) => l.eval(wo, wi) + p.eval(wo, wi),
+            _ => Spectrum::ZERO,
+        }
+    }
+
+    /// Probabilities of choosing the diffuse and glossy lobes when sampling (by albedo).
+    #[inline]
+    fn lobe_probs(l: &Lambert, p: &Phong) -> (f32, f32) {
+        let a = lum(l.kd);
+        let b = lum(p.ks);
+        if a + b <= 0.0 {
+            (0.5, 0.5)
+        } else {
+            (a / (a + b), b / (a + b))
+        }
+    }
+
+    /// Solid-angle density of `sample` producing wi.
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Bsdf::Diffuse(l) => l.pdf(wo, wi),
+            Bsdf::DiffuseGlossy(l, p) => {
+                let (pd, pg) = Self::lobe_probs(l, p);
+                pd * l.pdf(wo, wi) + pg * p.pdf(wo, wi)
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Sample wi given wo; `u_lobe` chooses a lobe (or reflection vs refraction), `u` the direction.
+    #[inline]
+    pub fn sample<const N: usize>(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample<N>> {
+        match self {
+            Bsdf::Black => None,
+            Bsdf::Diffuse(l) => l.sample(wo, u),
+            Bsdf::DiffuseGlossy(l, p) => {
+                // One-sample mixture of the lobes; the pdf is the mixture density.
+                let (pd, _) = Self::lobe_probs(l, p);
+                let wi = if u_lobe < pd {
+                    l.sample_dir(wo, u)?
+                } else {
+                    p.sample_dir(wo, u)?
+                };
+                let pdf = self.pdf(wo, wi);
+                if pdf <= 0.0 || wi.z <= 0.0 {
+                    return None;
+                }
+                let f: Spectrum<N> = self.eval(wo, wi);
+                Some(BsdfSample {
+                    wi,
+                    weight: f * (wi.z / pdf),
+                    pdf,
+                    delta: false,
+                })
+            }
+            Bsdf::Mirror(m) => m.sample(wo),
+            Bsdf::Dielectric(d) => d.sample(wo, u_lobe),
+        }
+    }
+
+    /// The local albedo used by classic Russian roulette (upper bound, per band).
+    #[inline]
+    pub fn albedo<const N: usize>(&self) -> Spectrum<N> {
+        match self {
+            Bsdf::Black => Spectrum::ZERO,
+            Bsdf::Diffuse(l) => Spectrum::from_rgb(l.kd),
+            Bsdf::DiffuseGlossy(l, p) => Spectrum::from_rgb(l.kd) + Spectrum::from_rgb(p.ks),
+            Bsdf::Mirror(m) => Spectrum::from_rgb(m.ks),
+            Bsdf::Dielectric(_) => Spectrum::ONE,
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests;

@@ -1,0 +1,300 @@
+//! Scenes: files (OBJ/MTL, TOML) and built-ins are read into a plain `SceneDesc`, which
+//! `Scene::build` turns into the immutable scene the estimators see (triangles, materials,
+//! textures, lights and the BVH).
+
+pub mod builtin;
+pub mod camera;
+pub mod mtl;
+pub mod obj;
+pub mod texture;
+pub mod toml_scene;
+
+pub use camera::{Camera, CameraDesc};
+pub use texture::Texture;
+
+use crate::accel::Bvh;
+use crate::light::Lights;
+use crate::material::Bsdf;
+use crate::math::{Bounds3, Vec2, Vec3};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A material as files describe it (MTL vocabulary).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialDesc {
+    pub name: String,
+    pub kd: [f32; 3],
+    pub ks: [f32; 3],
+    pub ns: f32,
+    pub ni: f32,
+    pub ke: [f32; 3],
+    pub illum: u8,
+    pub map_kd: Option<PathBuf>,
+}
+
+impl MaterialDesc {
+    /// MTL defaults: grey diffuse, no specular, no emission.
+    pub fn named(name: &str) -> Self {
+        MaterialDesc {
+            name: name.to_string(),
+            kd: [0.5; 3],
+            ks: [0.0; 3],
+            ns: 1.0,
+            ni: 1.5,
+            ke: [0.0; 3],
+            illum: 2,
+            map_kd: None,
+        }
+    }
+}
+
+/// Render settings a scene file may suggest (the CLI overrides them).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderDefaults {
+    pub res: Option<(u32, u32)>,
+    pub spp: Option<u32>,
+    pub max_depth: Option<i32>,
+}
+
+/// A scene as plain data, before acceleration structures are built.
+#[derive(Clone, Debug, Default)]
+pub struct SceneDesc {
+    pub name: String,
+    pub positions: Vec<[Vec3; 3]>,
+    pub normals: Vec<Option<[Vec3; 3]>>,
+    pub uvs: Vec<Option<[Vec2; 3]>>,
+    pub material: Vec<u32>,
+    pub materials: Vec<MaterialDesc>,
+    pub camera: Option<CameraDesc>,
+    pub defaults: RenderDefaults,
+    /// Zero-area (or non-finite) faces skipped while loading.
+    pub skipped_degenerate: usize,
+    pub warnings: Vec<String>,
+}
+
+impl SceneDesc {
+    /// Add a triangle unless it has zero area (then it is counted and skipped).
+    pub fn push_triangle(
+        &mut self,
+        v: [Vec3; 3],
+        n: Option<[Vec3; 3]>,
+        uv: Option<[Vec2; 3]>,
+        material: u32,
+    ) {
+        let c = (v[1] - v[0]).cross(v[2] - v[0]);
+        let scale = (v[1] - v[0]).length_squared() + (v[2] - v[0]).length_squared();
+        if !c.is_finite() || c.length_squared() <= 1e-14 * scale * scale || scale == 0.0 {
+            self.skipped_degenerate += 1;
+            return;
+        }
+        self.positions.push(v);
+        self.normals.push(n);
+        self.uvs.push(uv);
+        self.material.push(material);
+    }
+
+    pub fn bounds(&self) -> Bounds3 {
+        let mut b = Bounds3::EMPTY;
+        for t in &self.positions {
+            for v in t {
+                b.grow(*v);
+            }
+        }
+        b
+    }
+}
+
+/// A material ready for shading.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    pub bsdf: Bsdf,
+    /// Emitted radiance (linear RGB) on the front side (counter-clockwise winding).
+    pub emission: [f32; 3],
+    pub kd_texture: Option<u32>,
+}
+
+impl Material {
+    pub fn is_emissive(&self) -> bool {
+        self.emission.iter().any(|&e| e > 0.0)
+    }
+}
+
+/// What `kalos info` and the stats report about a scene.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct SceneInfo {
+    pub name: String,
+    pub triangles: usize,
+    pub materials: usize,
+    pub emitters: usize,
+    pub skipped_degenerate: usize,
+    pub bounds_min: [f32; 3],
+    pub bounds_max: [f32; 3],
+    pub load_seconds: f64,
+    pub bvh_seconds: f64,
+    pub bvh_nodes: usize,
+    pub bvh_bytes: usize,
+}
+
+/// The immutable scene the estimators render.
+pub struct Scene {
+    pub tris: Vec<[Vec3; 3]>,
+    /// Per triangle: shading normals (None: flat shading).
+    pub normals: Vec<Option<[Vec3; 3]>>,
+    pub uvs: Vec<Option<[Vec2; 3]>>,
+    pub tri_material: Vec<u32>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub bvh: Bvh,
+    pub lights: Lights,
+    pub camera: CameraDesc,
+    pub defaults: RenderDefaults,
+    pub info: SceneInfo,
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// Build textures, materials, lights and the BVH from a description.
+    pub fn build(desc: SceneDesc, load_seconds: f64) -> Result<Scene, String> {
+        let mut textures: Vec<Texture> = Vec::new();
+        let mut tex_paths: Vec<PathBuf> = Vec::new();
+        let mut materials = Vec::with_capacity(desc.materials.len());
+        for m in &desc.materials {
+            let kd_texture = match &m.map_kd {
+                Some(p) => Some(match tex_paths.iter().position(|q| q == p) {
+                    Some(i) => i as u32,
+                    None => {
+                        textures.push(Texture::load(p)?);
+                        tex_paths.push(p.clone());
+                        textures.len() as u32 - 1
+                    }
+                }),
+                None => None,
+            };
+            materials.push(Material {
+                name: m.name.clone(),
+                bsdf: Bsdf::from_mtl(m.kd, m.ks, m.ns, m.ni, m.illum),
+                emission: m.ke,
+                kd_texture,
+            });
+        }
+        let t0 = Instant::now();
+        let bvh = Bvh::build(&desc.positions);
+        let bvh_seconds = t0.elapsed().as_secs_f64();
+        let lights = Lights::new(&desc.positions, &desc.material, &materials);
+        let bounds = desc.bounds();
+        let camera = desc.camera.unwrap_or_else(|| default_camera(&bounds));
+        let mut warnings = desc.warnings;
+        if lights.is_empty() {
+            warnings.push(format!(
+                "scene {} has no emitter: the image will be black",
+                desc.name
+            ));
+        }
+        if desc.skipped_degenerate > 0 {
+            warnings.push(format!(
+                "scene {}: skipped {} zero-area faces",
+                desc.name, desc.skipped_degenerate
+            ));
+        }
+        let info = SceneInfo {
+            name: desc.name.clone(),
+            triangles: desc.positions.len(),
+            materials: materials.len(),
+            emitters: lights.len(),
+            skipped_degenerate: desc.skipped_degenerate,
+            bounds_min: if bounds.is_empty() {
+                [0.0; 3]
+            } else {
+                bounds.min.into()
+            },
+            bounds_max: if bounds.is_empty() {
+                [0.0; 3]
+            } else {
+                bounds.max.into()
+            },
+            load_seconds,
+            bvh_seconds,
+            bvh_nodes: bvh.node_count(),
+            bvh_bytes: bvh.memory_bytes(),
+        };
+        Ok(Scene {
+            tris: desc.positions,
+            normals: desc.normals,
+            uvs: desc.uvs,
+            tri_material: desc.material,
+            materials,
+            textures,
+            bvh,
+            lights,
+            camera,
+            defaults: desc.defaults,
+            info,
+            warnings,
+        })
+    }
+
+    /// The material of triangle `prim`.
+    #[inline]
+    pub fn material_of(&self, prim: u32) -> &Material {
+        &self.materials[self.tri_material[prim as usize] as usize]
+    }
+}
+
+/// A camera on +z looking at the centre of the bounds, 45 degrees vertical.
+pub fn default_camera(b: &Bounds3) -> CameraDesc {
+    let (c, r) = if b.is_empty() {
+        (Vec3::ZERO, 1.0)
+    } else {
+        (b.centroid(), (b.diagonal() * 0.5).max(1e-3))
+    };
+    let fov = 45.0f32;
+    let dist = r / (fov.to_radians() * 0.5).tan() * 1.1;
+    CameraDesc {
+        origin: (c + Vec3::new(0.0, 0.0, dist)).into(),
+        target: c.into(),
+        up: [0.0, 1.0, 0.0],
+        fov,
+    }
+}
+
+/// Load a scene named on the command line: a built-in name, an `.obj` or a `.toml` file.
+pub fn load(spec: &str) -> Result<Scene, String> {
+    let t0 = Instant::now();
+    let desc = load_desc(spec)?;
+    Scene::build(desc, t0.elapsed().as_secs_f64())
+}
+
+/// Read a scene description without building it.
+pub fn load_desc(spec: &str) -> Result<SceneDesc, String> {
+    if let Some(desc) = builtin::load(spec)? {
+        return Ok(desc);
+    }
+    let path = Path::new(spec);
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("obj") => {
+            if !path.is_file() {
+                return Err(format!("{spec}: no such file"));
+            }
+            let mut desc = SceneDesc {
+                name: path
+                    .file_stem()
+                    .and_then(|s| s.to_str())
+                    .unwrap_or(spec)
+                    .to_string(),
+                ..Default::default()
+            };
+            obj::load_obj_file(path, glam::Mat4::IDENTITY, &mut desc)?;
+            Ok(desc)
+        }
+        Some("toml") => toml_scene::load(path),
+        _ => Err(format!(
+            "{spec}: not a built-in scene ({}) nor an .obj or .toml file",
+            builtin::NAMES.join(", ")
+        )),
+    }
+}

@@ -1,0 +1,65 @@
+//! Image textures (map_Kd): PNG/JPEG decoded from sRGB to linear, bilinear lookup with
+//! wrap-around, OBJ's v axis pointing up.
+
+use std::path::Path;
+
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<[f32; 3]>,
+}
+
+impl Texture {
+    pub fn load(path: &Path) -> Result<Texture, String> {
+        let img = image::open(path)
+            .map_err(|e| format!("{}: cannot read texture: {e}", path.display()))?
+            .to_rgb8();
+        let (width, height) = img.dimensions();
+        if width == 0 || height == 0 {
+            return Err(format!("{}: texture is empty", path.display()));
+        }
+        let lut: Vec<f32> = (0..256)
+            .map(|i| crate::image_io::srgb_decode(i as f32 / 255.0))
+            .collect();
+        let texels = img
+            .pixels()
+            .map(|p| [lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]])
+            .collect();
+        Ok(Texture {
+            width,
+            height,
+            texels,
+        })
+    }
+
+    #[inline]
+    fn texel(&self, x: i64, y: i64) -> [f32; 3] {
+        let xi = x.rem_euclid(self.width as i64) as usize;
+        let yi = y.rem_euclid(self.height as i64) as usize;
+        self.texels[yi * self.width as usize + xi]
+    }
+
+    /// Bilinear lookup at (u, v), v = 0 at the bottom of the image.
+    #[inline]
+    pub fn lookup(&self, u: f32, v: f32) -> [f32; 3] {
+        if !(u.is_finite() && v.is_finite()) {
+            return self.texel(0, 0);
+        }
+        let x = u * self.width as f32 - 0.5;
+        let y = (1.0 - v) * self.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let a = self.texel(x0, y0);
+        let b = self.texel(x0 + 1, y0);
+        let c = self.texel(x0, y0 + 1);
+        let d = self.texel(x0 + 1, y0 + 1);
+        let mut out = [0.0; 3];
+        for i in 0..3 {
+            out[i] =
+                (a[i] * (1.0 - fx) + b[i] * fx) * (1.0 - fy) + (c[i] * (1.0 - fx) + d[i] * fx) * fy;
+        }
+        out
+    }
+}
