@@ -149,3 +149,80 @@ impl Lights {
         (d, local.z * std::f32::consts::FRAC_1_PI)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Bsdf;
+    use crate::sampling::chi2::{assert_chi2, chi2_sphere};
+
+    fn mat(le: [f32; 3]) -> Material {
+        Material {
+            name: "l".into(),
+            bsdf: Bsdf::Black,
+            emission: le,
+            kd_texture: None,
+        }
+    }
+
+    #[test]
+    fn chi2_light_sampling_in_solid_angle() {
+        // Two emitters of different power and size, seen from the origin.
+        let tris = [
+            [
+                Vec3::new(-1.0, 1.0, -1.0),
+                Vec3::new(1.0, 1.0, -1.0),
+                Vec3::new(0.0, 1.0, 1.0),
+            ],
+            [
+                Vec3::new(2.0, -1.0, 0.5),
+                Vec3::new(2.0, 1.0, 0.0),
+                Vec3::new(2.0, 0.0, 1.5),
+            ],
+            [
+                Vec3::new(0.0, -3.0, 0.0),
+                Vec3::new(1.0, -3.0, 0.0),
+                Vec3::new(0.0, -3.0, 1.0),
+            ],
+        ];
+        let mats = [mat([1.0, 2.0, 3.0]), mat([5.0; 3]), mat([0.0; 3])];
+        let lights = Lights::new(&tris, &[0, 1, 2], &mats);
+        assert_eq!(lights.len(), 2);
+        assert_eq!(lights.light_of(2), None);
+        let pdf = |w: Vec3| -> f32 {
+            // sum over lights hit by the ray from the origin (no occlusion between them here)
+            let mut p = 0.0;
+            for (i, l) in lights.all().iter().enumerate() {
+                let r = crate::math::Ray::new(Vec3::ZERO, w);
+                let bvh = crate::accel::Bvh::build(&[[l.v0, l.v0 + l.e1, l.v0 + l.e2]]);
+                if let Some(h) = bvh.intersect(&r, f32::INFINITY) {
+                    let cos = w.dot(l.n).abs();
+                    p += lights.pdf_position(i as u32) * h.t * h.t / cos;
+                }
+            }
+            p
+        };
+        let r = chi2_sphere(
+            |u1, u2| lights.sample_position(u1, u2).map(|s| s.p.normalize()),
+            pdf,
+            200_000,
+            42,
+        );
+        assert_chi2("light sampling", &r);
+        assert!((r.pdf_integral - 1.0).abs() < 5e-3, "{}", r.pdf_integral);
+    }
+
+    #[test]
+    fn chi2_emission_direction() {
+        let tris = [[Vec3::ZERO, Vec3::X, Vec3::Y]];
+        let lights = Lights::new(&tris, &[0], &[mat([1.0; 3])]);
+        let n = lights.get(0).n;
+        let r = chi2_sphere(
+            |_, u| Some(lights.sample_direction(0, u).0),
+            |w| (w.dot(n).max(0.0)) * std::f32::consts::FRAC_1_PI,
+            200_000,
+            43,
+        );
+        assert_chi2("emission direction", &r);
+    }
+}

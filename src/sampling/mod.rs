@@ -4,5 +4,8 @@
 pub mod rng;
 pub mod warp;
 
+#[cfg(test)]
+pub(crate) mod chi2;
+
 pub use rng::{SampleStream, SamplerConfig, SamplerKind};
 pub use warp::*;
