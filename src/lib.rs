@@ -2,6 +2,7 @@
 #![forbid(unsafe_code)]
 
 pub mod film;
+pub mod filter;
 pub mod image_io;
 pub mod math;
 pub mod sampling;
