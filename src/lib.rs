@@ -5,5 +5,6 @@ pub mod film;
 pub mod filter;
 pub mod image_io;
 pub mod math;
+pub mod metrics;
 pub mod sampling;
 pub mod spectrum;
