@@ -8,11 +8,13 @@
 pub mod accel;
 pub mod cli;
 pub mod film;
+pub mod filter;
 pub mod image_io;
 pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod math;
+pub mod metrics;
 pub mod pipeline;
 pub mod sampling;
 pub mod scene;

@@ -18,7 +18,10 @@ fn rmse(a: &RgbImage, b: &RgbImage) -> f64 {
 
 #[test]
 fn cornell_agrees_with_mitsuba() {
-    let reference = read_image(std::path::Path::new("assets/reference/cornell-256-reference.exr")).unwrap();
+    let reference = read_image(std::path::Path::new(
+        "assets/reference/cornell-256-reference.exr",
+    ))
+    .unwrap();
     let scene = kalos::scene::load("cornell").unwrap();
     let set = settings(&scene, 256, 256);
     let ref_mean: f64 = reference.mean().iter().sum::<f64>() / 3.0;
@@ -35,7 +38,11 @@ fn cornell_agrees_with_mitsuba() {
         last = e;
         if spp == 64 {
             let rel = (mean - ref_mean).abs() / ref_mean;
-            assert!(rel < 0.005, "mean {mean} vs reference {ref_mean} ({:.3}%)", rel * 100.0);
+            assert!(
+                rel < 0.005,
+                "mean {mean} vs reference {ref_mean} ({:.3}%)",
+                rel * 100.0
+            );
         }
     }
     eprintln!("(spp, rmse, mean) {errors:?}, reference mean {ref_mean}");
