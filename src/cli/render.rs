@@ -10,7 +10,7 @@ use crate::spectrum::SpectralMode;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
@@ -70,6 +70,59 @@ pub struct RenderArgs {
     /// No progress bar or summary.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Rendering method: plain (same spp everywhere) or dtf (dependent-tests driven filtering).
+    #[arg(long, default_value = "plain", value_parser = ["plain", "dtf"])]
+    pub method: String,
+    /// DTF: dependent samples per pixel n in phase 1.
+    #[arg(long, default_value_t = 50)]
+    pub dtf_n: u32,
+    /// DTF: prescribed relative error eps_r (used when neither --spp nor --time is given).
+    #[arg(long, default_value_t = 0.03)]
+    pub dtf_eps: f32,
+    /// DTF: largest region side m_max.
+    #[arg(long, default_value_t = 4)]
+    pub dtf_mmax: u32,
+    /// DTF: minimal decrease Delta f[0]_min of the primary weight to grow a region.
+    #[arg(long, default_value_t = 0.01)]
+    pub dtf_df0: f32,
+    /// DTF: distance kernel d: pyramid (the paper's) or gaussian.
+    #[arg(long, default_value = "pyramid", value_parser = ["pyramid", "gaussian"])]
+    pub dtf_kernel: String,
+    /// DTF: negative-weight removal: active-set (exact, vanishes as N grows) or paper (as printed).
+    #[arg(long, default_value = "active-set", value_parser = ["active-set", "paper"])]
+    pub dtf_clamp: String,
+    /// DTF: sample categories for N, comma-separated, increasing.
+    #[arg(long, value_delimiter = ',')]
+    pub dtf_categories: Option<Vec<u32>>,
+    /// DTF: write the intermediate images beside the output (dependent, independent,
+    /// filtered, combined, N and M maps).
+    #[arg(long)]
+    pub dtf_layers: bool,
+}
+
+impl RenderArgs {
+    /// The DTF parameters these options give.
+    pub fn dtf_params(&self) -> crate::filter::dtf::DtfParams {
+        use crate::filter::dtf::{Clamp, DtfParams, Kernel};
+        let d = DtfParams::default();
+        DtfParams {
+            n: self.dtf_n,
+            eps_r: self.dtf_eps,
+            categories: self.dtf_categories.clone().unwrap_or(d.categories),
+            m_max: self.dtf_mmax,
+            df0_min: self.dtf_df0,
+            kernel: if self.dtf_kernel == "gaussian" {
+                Kernel::Gaussian
+            } else {
+                Kernel::Pyramid
+            },
+            clamp: if self.dtf_clamp == "paper" {
+                Clamp::Paper
+            } else {
+                Clamp::ActiveSet
+            },
+        }
+    }
 }
 
 fn parse_res(s: &str) -> Result<(u32, u32), String> {
@@ -142,7 +195,23 @@ pub struct RenderStats {
     pub max_depth: i32,
     pub rr: RrMode,
     pub seed: u64,
+    pub method: String,
     pub mean_rgb: [f64; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dtf: Option<DtfStats>,
+}
+
+/// DTF's share of the statistics.
+#[derive(serde::Serialize)]
+pub struct DtfStats {
+    pub n: u32,
+    pub average_n: f64,
+    pub phase1_seconds: f64,
+    pub phase2_seconds: f64,
+    pub filter_seconds: f64,
+    pub filter_share: f64,
+    pub average_region: f64,
+    pub params: crate::filter::dtf::DtfParams,
 }
 
 pub fn progress_bar(quiet: bool) -> ProgressBar {
@@ -203,16 +272,54 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
             },
         },
     };
-    let budget = match (a.time, a.spp) {
-        (Some(t), _) => Budget::Time(t),
-        (None, Some(n)) => Budget::Spp(n),
-        (None, None) => Budget::Spp(scene.defaults.spp.unwrap_or(64)),
-    };
     let pool = thread_pool(a.threads)?;
     let pb = progress_bar(a.quiet);
-    let out = pool.install(|| render(&scene, &set, budget, Some(&pb)))?;
-    write_film(&a.output, &out.film, a.exposure, a.aovs)?;
-    let rej = out.film.rejected;
+    let (film, image, counters, seconds, spp, dtf) = if a.method == "dtf" {
+        use crate::pipeline::{render_dtf, DtfBudget};
+        let params = a.dtf_params();
+        let budget = match (a.time, a.spp) {
+            (Some(t), _) => DtfBudget::Time(t),
+            (None, Some(n)) => DtfBudget::Spp(n as f64),
+            (None, None) => DtfBudget::RelativeError,
+        };
+        let run = pool.install(|| render_dtf(&scene, &set, &params, budget, Some(&pb)))?;
+        if a.dtf_layers {
+            write_dtf_layers(&a.output, &run, a.exposure)?;
+        }
+        let mut film = run.independent.clone();
+        film.merge(&run.dependent);
+        let stats = DtfStats {
+            n: params.n,
+            average_n: run.average_n(),
+            phase1_seconds: run.phase1_seconds,
+            phase2_seconds: run.phase2_seconds,
+            filter_seconds: run.filter_seconds,
+            filter_share: run.filter_seconds / run.seconds,
+            average_region: run.out.region.iter().map(|&m| m as f64).sum::<f64>()
+                / run.out.region.len() as f64,
+            params,
+        };
+        let spp = (film.total_samples() as f64 / (width as f64 * height as f64)).round() as u32;
+        (
+            film,
+            run.out.combined.clone(),
+            run.counters,
+            run.seconds,
+            spp,
+            Some(stats),
+        )
+    } else {
+        let budget = match (a.time, a.spp) {
+            (Some(t), _) => Budget::Time(t),
+            (None, Some(n)) => Budget::Spp(n),
+            (None, None) => Budget::Spp(scene.defaults.spp.unwrap_or(64)),
+        };
+        let out = pool.install(|| render(&scene, &set, budget, Some(&pb)))?;
+        let img = RgbImage::new(width, height, out.film.mean_rgb());
+        (out.film, img, out.counters, out.seconds, out.spp, None)
+    };
+    write_output(&a.output, &image, &film, a.exposure, a.aovs)?;
+    let rej = film.rejected;
     if rej.total() > 0 {
         eprintln!(
             "kalos: warning: rejected {} samples ({} NaN, {} infinite); they are not in the image",
@@ -225,12 +332,12 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         scene: scene.info.name.clone(),
         width,
         height,
-        spp: out.spp,
-        seconds: out.seconds,
-        paths: out.counters.paths,
-        rays: out.counters.rays,
-        paths_per_second: out.counters.paths as f64 / out.seconds,
-        rays_per_second: out.counters.rays as f64 / out.seconds,
+        spp,
+        seconds,
+        paths: counters.paths,
+        rays: counters.rays,
+        paths_per_second: counters.paths as f64 / seconds,
+        rays_per_second: counters.rays as f64 / seconds,
         bvh_build_seconds: scene.info.bvh_seconds,
         load_seconds: scene.info.load_seconds,
         rejected_samples: rej.total(),
@@ -243,7 +350,9 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         max_depth: set.integrator.max_depth,
         rr: a.rr,
         seed: a.seed,
-        mean_rgb: RgbImage::new(width, height, out.film.mean_rgb()).mean(),
+        method: a.method.clone(),
+        mean_rgb: image.mean(),
+        dtf,
     };
     if let Some(p) = &a.stats {
         let json = serde_json::to_string_pretty(&stats).map_err(|e| e.to_string())?;
@@ -265,14 +374,14 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     Ok(())
 }
 
-/// Write the film's mean image, with variance and count layers when asked.
-pub fn write_film(
-    path: &std::path::Path,
+/// Write the displayed image, with the film's variance and count layers when asked.
+pub fn write_output(
+    path: &Path,
+    img: &RgbImage,
     film: &Film,
     exposure: f32,
     aovs: bool,
 ) -> Result<(), String> {
-    let img = RgbImage::new(film.width, film.height, film.mean_rgb());
     let var = film.variance_rgb();
     let cnt = film.counts();
     let extra = if aovs {
@@ -289,5 +398,56 @@ pub fn write_film(
     } else {
         vec![]
     };
-    write_image(path, &img, exposure, &extra)
+    write_image(path, img, exposure, &extra)
+}
+
+/// `out.exr` -> `out-NAME.exr` (same folder and extension).
+pub fn sibling(path: &Path, name: &str) -> PathBuf {
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("out");
+    let ext = path.extension().and_then(|s| s.to_str()).unwrap_or("exr");
+    path.with_file_name(format!("{stem}-{name}.{ext}"))
+}
+
+/// The paper's figure 2 as files: dependent, independent, filtered, combined, and maps of
+/// N and of the region size M (maps are normalised to their maximum in PNG output).
+fn write_dtf_layers(
+    path: &Path,
+    run: &crate::pipeline::DtfRun,
+    exposure: f32,
+) -> Result<(), String> {
+    let (w, h) = (run.out.width, run.out.height);
+    let images = [
+        ("dependent", RgbImage::new(w, h, run.dependent.mean_rgb())),
+        (
+            "independent",
+            RgbImage::new(w, h, run.independent.mean_rgb()),
+        ),
+        ("filtered", run.out.filtered.clone()),
+        ("combined", run.out.combined.clone()),
+    ];
+    for (name, img) in &images {
+        write_image(&sibling(path, name), img, exposure, &[])?;
+    }
+    let png = crate::image_io::format_of(path)? == crate::image_io::Format::Png;
+    let map = |v: Vec<f32>| {
+        let k = if png {
+            1.0 / v.iter().cloned().fold(1e-9f32, f32::max)
+        } else {
+            1.0
+        };
+        RgbImage::new(w, h, v.iter().map(|&x| [x * k; 3]).collect())
+    };
+    write_image(
+        &sibling(path, "N"),
+        &map(run.alloc.iter().map(|&n| n as f32).collect()),
+        0.0,
+        &[],
+    )?;
+    write_image(
+        &sibling(path, "M"),
+        &map(run.out.region.iter().map(|&m| m as f32).collect()),
+        0.0,
+        &[],
+    )?;
+    Ok(())
 }

@@ -1,0 +1,137 @@
+//! Dependent-tests driven filtering (Csonka, Szirmay-Kalos, Kelemen, Antal), as a pipeline
+//! over any estimator:
+//!
+//! 1. phase of dependent tests: n samples per pixel, all pixels using the same random
+//!    numbers per sample index (stream 0, pixel left out): C_d and sigma^2 per pixel;
+//! 2. sample allocation N[p]: for a prescribed relative error eps_r, or a budget
+//!    distributed in proportion to sigma^2 / ||C_d||;
+//! 3. phase of independent tests: N[p] samples per pixel from an independent stream
+//!    (stream 1): C_i;
+//! 4. region forming and the error-optimal filter, 5. display C = (C_d n + C_i,f N)/(n + N)
+//!    (both in `filter::dtf`, pure functions of the two films).
+
+use super::render::{render_into, Counts, RenderSettings};
+use crate::film::Film;
+use crate::filter::dtf::{allocate_budget, allocate_relative, dtf_filter, DtfOutput, DtfParams};
+use crate::integrator::Counters;
+use crate::scene::Scene;
+use indicatif::ProgressBar;
+use std::time::Instant;
+
+/// How the amount of work of phase 2 is set.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DtfBudget {
+    /// The paper's prescribed relative error eps_r (`DtfParams::eps_r`).
+    RelativeError,
+    /// An average of this many samples per pixel over both phases.
+    Spp(f64),
+    /// Wall-clock seconds for the whole method (both phases and the filter).
+    Time(f64),
+}
+
+/// Everything DTF produced, for images, layers and statistics.
+pub struct DtfRun {
+    pub dependent: Film,
+    pub independent: Film,
+    /// N[p] as allocated.
+    pub alloc: Vec<u32>,
+    pub out: DtfOutput,
+    pub counters: Counters,
+    pub phase1_seconds: f64,
+    pub phase2_seconds: f64,
+    pub filter_seconds: f64,
+    pub seconds: f64,
+}
+
+impl DtfRun {
+    /// Average N over the image.
+    pub fn average_n(&self) -> f64 {
+        self.alloc.iter().map(|&n| n as f64).sum::<f64>() / self.alloc.len().max(1) as f64
+    }
+}
+
+/// Run the whole method. `set.sampler.dependent` is ignored: the phases set it.
+pub fn render_dtf(
+    scene: &Scene,
+    set: &RenderSettings,
+    params: &DtfParams,
+    budget: DtfBudget,
+    progress: Option<&ProgressBar>,
+) -> Result<DtfRun, String> {
+    params.validate()?;
+    let t0 = Instant::now();
+    let pixels = set.width as usize * set.height as usize;
+    if let Some(pb) = progress {
+        pb.set_length(2 * set.height as u64);
+    }
+
+    // Phase of dependent tests: C_d, sigma^2 from n samples sharing random numbers.
+    let mut dep_set = *set;
+    dep_set.sampler.dependent = true;
+    let mut dependent = Film::new(set.width, set.height)?;
+    let mut counters = render_into(
+        scene,
+        &dep_set,
+        &mut dependent,
+        Counts::Uniform(params.n),
+        0,
+        0,
+        progress,
+    );
+    let phase1_seconds = t0.elapsed().as_secs_f64();
+
+    // Sample allocation N[p].
+    let alloc = match budget {
+        DtfBudget::RelativeError => allocate_relative(&dependent, params)?,
+        DtfBudget::Spp(total) => {
+            let rest = total - params.n as f64;
+            if rest < 0.0 {
+                return Err(format!(
+                    "--spp {total}: in DTF budget mode it is the average over both phases and must be at least --dtf-n {}",
+                    params.n
+                ));
+            }
+            allocate_budget(&dependent, params, rest)?
+        }
+        DtfBudget::Time(secs) => {
+            // samples per second measured in phase 1; keep ~2% of the budget for the filter
+            let rate = (params.n as f64 * pixels as f64) / phase1_seconds.max(1e-9);
+            let left = (secs * 0.98 - phase1_seconds).max(0.0);
+            allocate_budget(&dependent, params, rate * left / pixels as f64)?
+        }
+    };
+
+    // Phase of independent tests: N[p] samples from a stream independent of phase 1.
+    let t1 = Instant::now();
+    let mut ind_set = *set;
+    ind_set.sampler.dependent = false;
+    let mut independent = Film::new(set.width, set.height)?;
+    let c2 = render_into(
+        scene,
+        &ind_set,
+        &mut independent,
+        Counts::PerPixel(&alloc),
+        0,
+        1,
+        progress,
+    );
+    counters.add(&c2);
+    let phase2_seconds = t1.elapsed().as_secs_f64();
+
+    // Region forming, filtering and display.
+    let out = dtf_filter(&dependent, &independent, &alloc, params)?;
+    if let Some(pb) = progress {
+        pb.finish_and_clear();
+    }
+    Ok(DtfRun {
+        filter_seconds: out.seconds,
+        dependent,
+        independent,
+        alloc,
+        out,
+        counters,
+        phase1_seconds,
+        phase2_seconds,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
