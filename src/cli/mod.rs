@@ -18,6 +18,17 @@ pub enum Command {
     Render(render::RenderArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Error metrics of an image against a reference: RMSE, relMSE, perceptual error
+    /// (pixels whose relative colour error exceeds 5%) and the ratio of mean luminances.
+    Compare {
+        /// The image to judge (.exr, .pfm or .png).
+        image: std::path::PathBuf,
+        /// The reference image.
+        reference: std::path::PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Print triangles, materials, emitters, bounds and load/BVH times of a scene.
     Info {
         /// Built-in scene name, .obj or .toml file.
@@ -35,6 +46,32 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Scenes => {
             for (name, what) in crate::scene::builtin::describe() {
                 println!("{name:<10} {what}");
+            }
+            Ok(())
+        }
+        Command::Compare {
+            image,
+            reference,
+            json,
+        } => {
+            let x = crate::image_io::read_image(&image)?;
+            let y = crate::image_io::read_image(&reference)?;
+            let m = crate::metrics::Metrics::compute(&x, &y)
+                .map_err(|e| format!("{} vs {}: {e}", image.display(), reference.display()))?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&m).map_err(|e| e.to_string())?
+                );
+            } else {
+                println!("rmse              {:.6}", m.rmse);
+                println!("relmse            {:.6}", m.relmse);
+                println!(
+                    "perceptual error  {} pixels ({:.2}%) above 5% relative error",
+                    m.perceptual_count,
+                    m.perceptual_share * 100.0
+                );
+                println!("luminance ratio   {:.5}", m.luminance_ratio);
             }
             Ok(())
         }
