@@ -241,16 +241,20 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> 
     b.build().map_err(|e| format!("--threads: {e}"))
 }
 
-pub fn run(a: RenderArgs) -> Result<(), String> {
+/// A finished render, before anything is written.
+pub struct Rendered {
+    /// The displayed image (plain: the film's mean; dtf: the combined image).
+    pub image: RgbImage,
+    /// All samples taken (for dtf: both phases merged), for the AOV layers.
+    pub film: Film,
+    pub stats: RenderStats,
+    pub dtf: Option<crate::pipeline::DtfRun>,
+}
+
+/// Render the scene `a.scene` (already loaded) as the options say.
+pub fn execute(a: &RenderArgs, scene: &crate::scene::Scene) -> Result<Rendered, String> {
     if a.spp == Some(0) {
         return Err("--spp: must be at least 1".into());
-    }
-    crate::image_io::format_of(&a.output).map_err(|e| format!("-o/--output: {e}"))?;
-    let scene = crate::scene::load(&a.scene)?;
-    if !a.quiet {
-        for w in &scene.warnings {
-            eprintln!("kalos: warning: {w}");
-        }
     }
     let (width, height) = a.res.or(scene.defaults.res).unwrap_or((256, 256));
     let set = RenderSettings {
@@ -274,7 +278,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     };
     let pool = thread_pool(a.threads)?;
     let pb = progress_bar(a.quiet);
-    let (film, image, counters, seconds, spp, dtf) = if a.method == "dtf" {
+    let (film, image, counters, seconds, spp, dtf, dtf_run) = if a.method == "dtf" {
         use crate::pipeline::{render_dtf, DtfBudget};
         let params = a.dtf_params();
         let budget = match (a.time, a.spp) {
@@ -282,10 +286,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
             (None, Some(n)) => DtfBudget::Spp(n as f64),
             (None, None) => DtfBudget::RelativeError,
         };
-        let run = pool.install(|| render_dtf(&scene, &set, &params, budget, Some(&pb)))?;
-        if a.dtf_layers {
-            write_dtf_layers(&a.output, &run, a.exposure)?;
-        }
+        let run = pool.install(|| render_dtf(scene, &set, &params, budget, Some(&pb)))?;
         let mut film = run.independent.clone();
         film.merge(&run.dependent);
         let stats = DtfStats {
@@ -300,13 +301,15 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
             params,
         };
         let spp = (film.total_samples() as f64 / (width as f64 * height as f64)).round() as u32;
+        let image = run.out.combined.clone();
         (
             film,
-            run.out.combined.clone(),
+            image,
             run.counters,
             run.seconds,
             spp,
             Some(stats),
+            Some(run),
         )
     } else {
         let budget = match (a.time, a.spp) {
@@ -314,11 +317,18 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
             (None, Some(n)) => Budget::Spp(n),
             (None, None) => Budget::Spp(scene.defaults.spp.unwrap_or(64)),
         };
-        let out = pool.install(|| render(&scene, &set, budget, Some(&pb)))?;
+        let out = pool.install(|| render(scene, &set, budget, Some(&pb)))?;
         let img = RgbImage::new(width, height, out.film.mean_rgb());
-        (out.film, img, out.counters, out.seconds, out.spp, None)
+        (
+            out.film,
+            img,
+            out.counters,
+            out.seconds,
+            out.spp,
+            None,
+            None,
+        )
     };
-    write_output(&a.output, &image, &film, a.exposure, a.aovs)?;
     let rej = film.rejected;
     if rej.total() > 0 {
         eprintln!(
@@ -354,16 +364,39 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         mean_rgb: image.mean(),
         dtf,
     };
+    Ok(Rendered {
+        image,
+        film,
+        stats,
+        dtf: dtf_run,
+    })
+}
+
+/// `kalos render`: load, render, write the image, layers and statistics.
+pub fn run(a: RenderArgs) -> Result<(), String> {
+    crate::image_io::format_of(&a.output).map_err(|e| format!("-o/--output: {e}"))?;
+    let scene = crate::scene::load(&a.scene)?;
+    if !a.quiet {
+        for w in &scene.warnings {
+            eprintln!("kalos: warning: {w}");
+        }
+    }
+    let r = execute(&a, &scene)?;
+    write_output(&a.output, &r.image, &r.film, a.exposure, a.aovs)?;
+    if let (true, Some(run)) = (a.dtf_layers, &r.dtf) {
+        write_dtf_layers(&a.output, run, a.exposure)?;
+    }
+    let stats = &r.stats;
     if let Some(p) = &a.stats {
-        let json = serde_json::to_string_pretty(&stats).map_err(|e| e.to_string())?;
+        let json = serde_json::to_string_pretty(stats).map_err(|e| e.to_string())?;
         std::fs::write(p, json + "\n").map_err(|e| format!("--stats {}: {e}", p.display()))?;
     }
     if !a.quiet {
         eprintln!(
             "kalos: {} {}x{} {} spp in {:.2} s: {:.3} M paths/s, {:.2} M rays/s -> {}",
             stats.scene,
-            width,
-            height,
+            stats.width,
+            stats.height,
             stats.spp,
             stats.seconds,
             stats.paths_per_second * 1e-6,
