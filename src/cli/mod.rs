@@ -1,6 +1,7 @@
 //! The command line: `kalos render|scenes|info`. Parsing lives here; the work is done
 //! by the library. Every error is one line naming the file, line or option at fault.
 
+pub mod experiment;
 pub mod render;
 
 use clap::{Parser, Subcommand};
@@ -28,6 +29,17 @@ pub enum Command {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+    },
+    /// Run named configurations at equal budgets against a reference: CSV, JSON, plots.
+    Experiment {
+        /// The experiment file (.toml).
+        file: std::path::PathBuf,
+        /// Output folder (default: FILE-results beside the file).
+        #[arg(long)]
+        out: Option<std::path::PathBuf>,
+        /// No per-run lines.
+        #[arg(short, long)]
+        quiet: bool,
     },
     /// Print triangles, materials, emitters, bounds and load/BVH times of a scene.
     Info {
@@ -75,6 +87,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             }
             Ok(())
         }
+        Command::Experiment { file, out, quiet } => experiment::run(&file, out, quiet),
         Command::Info { scene, json } => {
             let s = crate::scene::load(&scene)?;
             for w in &s.warnings {

@@ -1,0 +1,399 @@
+//! `kalos experiment FILE.toml`: named configurations (any render options) run at a list of
+//! equal budgets (seconds or spp) against a reference; writes results.csv, results.json,
+//! error-versus-time plots (log-log, PNG and SVG) and a side-by-side crop.
+//!
+//! ```toml
+//! scene = "cornell"                 # built-in, or an .obj/.toml path relative to this file
+//! options = "--res 128x128"         # options shared by every run (and the reference)
+//! repeats = 1                       # seeds per (config, budget); metrics are averaged
+//! crop = [40, 60, 48, 48]           # x, y, w, h of the side-by-side crop
+//! zoom = 4
+//!
+//! [reference]
+//! image = "ref.exr"                 # an image, relative to this file, or
+//! spp = 4096                        # rendered once with these options and cached
+//! options = "--rr classic"
+//!
+//! [budgets]
+//! seconds = [1, 2, 4, 8]            # or: spp = [16, 64, 256]
+//!
+//! [[config]]
+//! name = "path"
+//! options = ""
+//!
+//! [[config]]
+//! name = "dtf"
+//! options = "--method dtf --dtf-n 16"
+//! ```
+
+use super::render::{execute, RenderArgs};
+use crate::image_io::{read_image, write_image, RgbImage};
+use crate::metrics::Metrics;
+use crate::report::{crop, plot_panels, side_by_side, Panel, Series};
+use clap::Parser;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ExperimentFile {
+    scene: String,
+    #[serde(default)]
+    options: String,
+    #[serde(default)]
+    repeats: Option<u32>,
+    crop: Option<[u32; 4]>,
+    zoom: Option<u32>,
+    exposure: Option<f32>,
+    reference: ReferenceSpec,
+    budgets: BudgetSpec,
+    #[serde(rename = "config")]
+    configs: Vec<ConfigSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReferenceSpec {
+    image: Option<String>,
+    spp: Option<u32>,
+    #[serde(default)]
+    options: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BudgetSpec {
+    seconds: Option<Vec<f64>>,
+    spp: Option<Vec<u32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ConfigSpec {
+    name: String,
+    #[serde(default)]
+    options: String,
+}
+
+/// One run of one configuration at one budget.
+#[derive(Serialize, Clone, Debug)]
+pub struct ResultRow {
+    pub config: String,
+    pub budget: f64,
+    pub budget_kind: &'static str,
+    pub seed: u64,
+    pub seconds: f64,
+    pub spp: u32,
+    pub paths: u64,
+    pub mse: f64,
+    pub rmse: f64,
+    pub relmse: f64,
+    pub perceptual_count: u64,
+    pub perceptual_share: f64,
+    pub luminance_ratio: f64,
+    pub efficiency: f64,
+}
+
+#[derive(Parser)]
+#[command(no_binary_name = true)]
+struct OneRender {
+    #[command(flatten)]
+    args: RenderArgs,
+}
+
+/// Parse "scene + options" as `kalos render` would.
+fn parse_render(scene: &str, options: &[&str], what: &str) -> Result<RenderArgs, String> {
+    let mut argv: Vec<String> = vec![scene.to_string()];
+    argv.extend(options.iter().map(|s| s.to_string()));
+    OneRender::try_parse_from(argv)
+        .map(|o| o.args)
+        .map_err(|e| {
+            let first = e
+                .to_string()
+                .lines()
+                .next()
+                .unwrap_or("")
+                .trim_start_matches("error: ")
+                .to_string();
+            format!("{what}: {first}")
+        })
+}
+
+fn words(s: &str) -> Vec<&str> {
+    s.split_whitespace().collect()
+}
+
+fn safe_name(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String> {
+    let fname = file.display().to_string();
+    let text = std::fs::read_to_string(file).map_err(|e| format!("{fname}: {e}"))?;
+    let ex: ExperimentFile = toml::from_str(&text).map_err(|e| {
+        let line = e
+            .span()
+            .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+        let msg = e.message().replace('\n', " ");
+        match line {
+            Some(l) => format!("{fname}:{l}: {msg}"),
+            None => format!("{fname}: {msg}"),
+        }
+    })?;
+    let dir = file.parent().unwrap_or(Path::new("."));
+    let out = out.unwrap_or_else(|| {
+        dir.join(format!(
+            "{}-results",
+            file.file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("experiment")
+        ))
+    });
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    if ex.configs.is_empty() {
+        return Err(format!("{fname}: no [[config]]"));
+    }
+    let (budgets, kind): (Vec<f64>, &'static str) = match (&ex.budgets.seconds, &ex.budgets.spp) {
+        (Some(s), None) if !s.is_empty() => (s.clone(), "seconds"),
+        (None, Some(s)) if !s.is_empty() => (s.iter().map(|&v| v as f64).collect(), "spp"),
+        _ => {
+            return Err(format!(
+                "{fname}: [budgets] needs exactly one non-empty list: seconds or spp"
+            ))
+        }
+    };
+    if budgets.iter().any(|b| !(b.is_finite() && *b > 0.0)) {
+        return Err(format!("{fname}: [budgets]: every budget must be positive"));
+    }
+    let scene_spec = if crate::scene::builtin::NAMES.contains(&ex.scene.as_str()) {
+        ex.scene.clone()
+    } else {
+        dir.join(&ex.scene).display().to_string()
+    };
+    let scene = crate::scene::load(&scene_spec)?;
+    let common = words(&ex.options);
+
+    // Validate every configuration before spending time on any.
+    for c in &ex.configs {
+        let mut o = common.clone();
+        o.extend(words(&c.options));
+        parse_render(&scene_spec, &o, &format!("{fname}: config {}", c.name))?;
+    }
+
+    // The reference: an image, or a cached render.
+    let reference = match (&ex.reference.image, ex.reference.spp) {
+        (Some(p), None) => read_image(&dir.join(p))?,
+        (None, Some(spp)) => {
+            let mut o = common.clone();
+            o.extend(words(&ex.reference.options));
+            let spp_s = spp.to_string();
+            o.extend(["--spp", spp_s.as_str(), "-q"]);
+            let key = format!("{scene_spec} {}", o.join(" "));
+            let cached = out.join("reference.exr");
+            let key_file = out.join("reference.key");
+            if cached.exists()
+                && std::fs::read_to_string(&key_file).ok().as_deref() == Some(key.as_str())
+            {
+                read_image(&cached)?
+            } else {
+                if !quiet {
+                    eprintln!("kalos: rendering the reference ({key})");
+                }
+                let args = parse_render(&scene_spec, &o, &format!("{fname}: [reference]"))?;
+                let r = execute(&args, &scene)?;
+                write_image(&cached, &r.image, 0.0, &[])?;
+                std::fs::write(&key_file, &key)
+                    .map_err(|e| format!("{}: {e}", key_file.display()))?;
+                r.image
+            }
+        }
+        _ => {
+            return Err(format!(
+                "{fname}: [reference] needs exactly one of image or spp"
+            ))
+        }
+    };
+
+    let repeats = ex.repeats.unwrap_or(1).max(1);
+    let mut rows: Vec<ResultRow> = Vec::new();
+    let mut last_images: Vec<(String, RgbImage)> = Vec::new();
+    for c in &ex.configs {
+        let mut last = None;
+        for &b in &budgets {
+            for rep in 0..repeats {
+                let mut o = common.clone();
+                o.extend(words(&c.options));
+                let bs = if kind == "seconds" {
+                    b.to_string()
+                } else {
+                    (b as u32).to_string()
+                };
+                let seed = rep.to_string();
+                o.extend([
+                    if kind == "seconds" { "--time" } else { "--spp" },
+                    bs.as_str(),
+                    "--seed",
+                    seed.as_str(),
+                    "-q",
+                ]);
+                let args = parse_render(&scene_spec, &o, &format!("{fname}: config {}", c.name))?;
+                let r = execute(&args, &scene)?;
+                let m = Metrics::compute(&r.image, &reference).map_err(|e| {
+                    format!("{fname}: config {}: against the reference: {e}", c.name)
+                })?;
+                let row = ResultRow {
+                    config: c.name.clone(),
+                    budget: b,
+                    budget_kind: kind,
+                    seed: rep as u64,
+                    seconds: r.stats.seconds,
+                    spp: r.stats.spp,
+                    paths: r.stats.paths,
+                    mse: m.mse,
+                    rmse: m.rmse,
+                    relmse: m.relmse,
+                    perceptual_count: m.perceptual_count,
+                    perceptual_share: m.perceptual_share,
+                    luminance_ratio: m.luminance_ratio,
+                    efficiency: crate::metrics::efficiency(m.mse, r.stats.seconds),
+                };
+                if !quiet {
+                    eprintln!(
+                        "kalos: {:<16} {kind} {b:<6} seed {rep}: {:.2} s, {} spp, rmse {:.5}, relmse {:.5}, perceptual {:.1}%",
+                        c.name, row.seconds, row.spp, row.rmse, row.relmse, row.perceptual_share * 100.0
+                    );
+                }
+                rows.push(row);
+                if rep == 0 {
+                    let img_path = out.join(format!("{}-{}.exr", safe_name(&c.name), bs));
+                    write_image(&img_path, &r.image, 0.0, &[])?;
+                    last = Some(r.image);
+                }
+            }
+        }
+        if let Some(img) = last {
+            last_images.push((c.name.clone(), img));
+        }
+    }
+
+    // Tables.
+    let mut csv = String::from(
+        "config,budget,budget_kind,seed,seconds,spp,paths,mse,rmse,relmse,perceptual_count,perceptual_share,luminance_ratio,efficiency\n",
+    );
+    for r in &rows {
+        csv += &format!(
+            "{},{},{},{},{:.4},{},{},{:.6e},{:.6e},{:.6e},{},{:.6},{:.6},{:.6e}\n",
+            r.config,
+            r.budget,
+            r.budget_kind,
+            r.seed,
+            r.seconds,
+            r.spp,
+            r.paths,
+            r.mse,
+            r.rmse,
+            r.relmse,
+            r.perceptual_count,
+            r.perceptual_share,
+            r.luminance_ratio,
+            r.efficiency
+        );
+    }
+    let write = |name: &str, data: String| -> Result<(), String> {
+        let p = out.join(name);
+        std::fs::write(&p, data).map_err(|e| format!("{}: {e}", p.display()))
+    };
+    write("results.csv", csv)?;
+    write(
+        "results.json",
+        serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())? + "\n",
+    )?;
+
+    // Plots: metrics averaged over repeats, against measured seconds (and spp for spp budgets).
+    let averaged = |metric: fn(&ResultRow) -> f64, x: fn(&ResultRow) -> f64| -> Vec<Series> {
+        ex.configs
+            .iter()
+            .map(|c| Series {
+                name: c.name.clone(),
+                points: budgets
+                    .iter()
+                    .map(|&b| {
+                        let rs: Vec<&ResultRow> = rows
+                            .iter()
+                            .filter(|r| r.config == c.name && r.budget == b)
+                            .collect();
+                        let n = rs.len().max(1) as f64;
+                        (
+                            rs.iter().map(|r| x(r)).sum::<f64>() / n,
+                            rs.iter().map(|r| metric(r)).sum::<f64>() / n,
+                        )
+                    })
+                    .collect(),
+            })
+            .collect()
+    };
+    let panels = |x: fn(&ResultRow) -> f64, x_label: &str| {
+        vec![
+            Panel {
+                title: "RMSE".into(),
+                x_label: x_label.into(),
+                y_label: "RMSE".into(),
+                series: averaged(|r| r.rmse, x),
+            },
+            Panel {
+                title: "Perceptual error".into(),
+                x_label: x_label.into(),
+                y_label: "share of pixels with > 5% error".into(),
+                series: averaged(|r| r.perceptual_share, x),
+            },
+            Panel {
+                title: "relMSE".into(),
+                x_label: x_label.into(),
+                y_label: "relMSE".into(),
+                series: averaged(|r| r.relmse, x),
+            },
+        ]
+    };
+    plot_panels(
+        &out.join("error-vs-time"),
+        &panels(|r| r.seconds, "render time (s)"),
+    )?;
+    if kind == "spp" {
+        plot_panels(
+            &out.join("error-vs-spp"),
+            &panels(|r| r.spp as f64, "samples per pixel"),
+        )?;
+    }
+
+    // Side by side: the same crop of every configuration (largest budget) and the reference.
+    let c = ex.crop.unwrap_or_else(|| {
+        let s = reference.width.min(reference.height).min(96);
+        [(reference.width - s) / 2, (reference.height - s) / 2, s, s]
+    });
+    let mut tiles: Vec<(String, RgbImage)> = last_images
+        .iter()
+        .map(|(n, i)| (n.clone(), crop(i, c)))
+        .collect();
+    tiles.push(("reference".into(), crop(&reference, c)));
+    side_by_side(
+        &out.join("side-by-side.png"),
+        &tiles,
+        ex.zoom.unwrap_or(3),
+        ex.exposure.unwrap_or(0.0),
+    )?;
+    if !quiet {
+        eprintln!(
+            "kalos: wrote {}/results.csv, results.json, error-vs-time.png/.svg, side-by-side.png",
+            out.display()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,230 @@
+//! Reports: result tables (CSV/JSON), log-log error plots (PNG and SVG, plotters with the
+//! DejaVu Sans font shipped in assets/fonts) and side-by-side crops.
+
+use crate::image_io::{srgb_encode, RgbImage};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+use std::path::Path;
+use std::sync::Once;
+
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The font is compiled in; a failure here would be a corrupt asset.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+/// One line of a plot.
+pub struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// One panel of a figure.
+pub struct Panel {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<Series>,
+}
+
+fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in vals.filter(|v| v.is_finite() && *v > 0.0) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (0.1, 1.0);
+    }
+    if hi <= lo * 1.0001 {
+        return (lo / 1.5, hi * 1.5);
+    }
+    (lo / 1.15, hi * 1.15)
+}
+
+fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let (x0, x1) = range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0)));
+    let (y0, y1) = range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.1)));
+    let mut chart = ChartBuilder::on(area)
+        .caption(&p.title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(48)
+        .y_label_area_size(72)
+        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(&p.x_label)
+        .y_desc(&p.y_label)
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .x_label_formatter(&|v| format!("{v:.3}"))
+        .y_label_formatter(&|v| format!("{v:.2e}"))
+        .draw()
+        .map_err(e)?;
+    for (i, s) in p.series.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|q| q.0 > 0.0 && q.1 > 0.0)
+            .collect();
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+            .map_err(e)?
+            .label(&s.name)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+        chart
+            .draw_series(pts.iter().map(|&q| Circle::new(q, 4, color.filled())))
+            .map_err(e)?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 15))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(e)?;
+    Ok(())
+}
+
+fn draw_figure<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    panels: &[Panel],
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let areas = root.split_evenly((1, panels.len().max(1)));
+    for (a, p) in areas.iter().zip(panels) {
+        draw_panel(a, p)?;
+    }
+    root.present().map_err(|e| e.to_string())
+}
+
+/// A figure of log-log panels side by side, written as `stem.png` and `stem.svg`.
+pub fn plot_panels(stem: &Path, panels: &[Panel]) -> Result<(), String> {
+    register_font();
+    let size = (620 * panels.len().max(1) as u32, 480);
+    let png = stem.with_extension("png");
+    let svg = stem.with_extension("svg");
+    draw_figure(BitMapBackend::new(&png, size).into_drawing_area(), panels)
+        .map_err(|e| format!("{}: {e}", png.display()))?;
+    draw_figure(SVGBackend::new(&svg, size).into_drawing_area(), panels)
+        .map_err(|e| format!("{}: {e}", svg.display()))?;
+    Ok(())
+}
+
+/// Crop (x, y, w, h) of an image, clipped to it.
+pub fn crop(img: &RgbImage, c: [u32; 4]) -> RgbImage {
+    let x0 = c[0].min(img.width.saturating_sub(1));
+    let y0 = c[1].min(img.height.saturating_sub(1));
+    let w = c[2].min(img.width - x0).max(1);
+    let h = c[3].min(img.height - y0).max(1);
+    let mut data = Vec::with_capacity((w * h) as usize);
+    for y in y0..y0 + h {
+        for x in x0..x0 + w {
+            data.push(img.get(x, y));
+        }
+    }
+    RgbImage::new(w, h, data)
+}
+
+/// Tiles side by side, each scaled up by `zoom`, labelled underneath; sRGB PNG.
+pub fn side_by_side(
+    path: &Path,
+    tiles: &[(String, RgbImage)],
+    zoom: u32,
+    exposure: f32,
+) -> Result<(), String> {
+    register_font();
+    let zoom = zoom.max(1);
+    let tw = tiles.iter().map(|t| t.1.width).max().unwrap_or(1) * zoom;
+    let th = tiles.iter().map(|t| t.1.height).max().unwrap_or(1) * zoom;
+    let label_h = 28;
+    let gap = 6;
+    let n = tiles.len().max(1) as u32;
+    let size = (n * tw + (n + 1) * gap, th + label_h + 2 * gap);
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    let e = |e: DrawingAreaErrorKind<_>| format!("{}: {e}", path.display());
+    root.fill(&WHITE).map_err(e)?;
+    let k = 2f32.powf(exposure);
+    for (i, (name, img)) in tiles.iter().enumerate() {
+        let ox = gap + i as u32 * (tw + gap);
+        for y in 0..img.height * zoom {
+            for x in 0..img.width * zoom {
+                let p = img.get(x / zoom, y / zoom);
+                let c = |v: f32| (srgb_encode(v * k).clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+                root.draw_pixel(
+                    ((ox + x) as i32, (gap + y) as i32),
+                    &RGBColor(c(p[0]), c(p[1]), c(p[2])),
+                )
+                .map_err(e)?;
+            }
+        }
+        root.draw_text(
+            name,
+            &("sans-serif", 16).into_text_style(&root),
+            (ox as i32 + 2, (gap + th + 6) as i32),
+        )
+        .map_err(e)?;
+    }
+    root.present().map_err(e)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_plots_and_tiles() {
+        let dir = std::env::temp_dir().join(format!("kalos-report-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let panel = Panel {
+            title: "RMSE".into(),
+            x_label: "seconds".into(),
+            y_label: "rmse".into(),
+            series: vec![
+                Series {
+                    name: "path".into(),
+                    points: vec![(1.0, 0.1), (2.0, 0.07), (4.0, 0.05)],
+                },
+                Series {
+                    name: "dtf".into(),
+                    points: vec![(1.0, 0.05), (2.0, 0.035), (4.0, 0.025)],
+                },
+            ],
+        };
+        plot_panels(&dir.join("plot"), &[panel]).unwrap();
+        let svg = std::fs::read_to_string(dir.join("plot.svg")).unwrap();
+        assert!(svg.contains("dtf") && svg.contains("seconds"));
+        assert!(std::fs::metadata(dir.join("plot.png")).unwrap().len() > 1000);
+        let img = RgbImage::new(4, 4, vec![[0.5, 0.2, 0.1]; 16]);
+        let c = crop(&img, [1, 1, 10, 2]);
+        assert_eq!((c.width, c.height), (3, 2));
+        side_by_side(
+            &dir.join("tiles.png"),
+            &[("a".into(), c.clone()), ("b".into(), c)],
+            4,
+            0.0,
+        )
+        .unwrap();
+        let back = crate::image_io::read_image(&dir.join("tiles.png")).unwrap();
+        assert!(back.width > 24);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
