@@ -176,6 +176,12 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     if a.spp == Some(0) {
         return Err("--spp: must be at least 1".into());
     }
+    if !a.exposure.is_finite() {
+        return Err(format!(
+            "--exposure: {} is not a finite number of stops",
+            a.exposure
+        ));
+    }
     crate::image_io::format_of(&a.output).map_err(|e| format!("-o/--output: {e}"))?;
     let scene = crate::scene::load(&a.scene)?;
     if !a.quiet {
