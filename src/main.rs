@@ -1,8 +1,7 @@
 //! The `kalos` binary: parse the command line, call the library, report errors on one line.
-use clap::Parser;
 
 fn main() {
-    let cli = kalos::cli::Cli::parse();
+    let cli = kalos::cli::parse_args();
     if let Err(e) = kalos::cli::run(cli) {
         eprintln!("kalos: error: {e}");
         std::process::exit(1);

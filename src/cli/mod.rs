@@ -51,6 +51,28 @@ pub enum Command {
     },
 }
 
+/// Parse the command line. A bad option value (`--res abc`, `--max-depth 0`) is reported
+/// on one line, `kalos: error: invalid value 'abc' for '--res <RES>': ...`, exit code 2;
+/// other usage errors (unknown options, with clap's tip), help and version are clap's own.
+pub fn parse_args() -> Cli {
+    use clap::error::ErrorKind;
+    match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e)
+            if matches!(
+                e.kind(),
+                ErrorKind::InvalidValue | ErrorKind::ValueValidation
+            ) =>
+        {
+            let text = e.render().to_string();
+            let first = text.lines().next().unwrap_or_default();
+            eprintln!("kalos: error: {}", first.trim_start_matches("error: "));
+            std::process::exit(2);
+        }
+        Err(e) => e.exit(),
+    }
+}
+
 /// Run the CLI; Err is a one-line message for stderr.
 pub fn run(cli: Cli) -> Result<(), String> {
     match cli.command {

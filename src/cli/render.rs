@@ -256,6 +256,12 @@ pub fn execute(a: &RenderArgs, scene: &crate::scene::Scene) -> Result<Rendered, 
     if a.spp == Some(0) {
         return Err("--spp: must be at least 1".into());
     }
+    if !a.exposure.is_finite() {
+        return Err(format!(
+            "--exposure: {} is not a finite number of stops",
+            a.exposure
+        ));
+    }
     let (width, height) = a.res.or(scene.defaults.res).unwrap_or((256, 256));
     let set = RenderSettings {
         width,

@@ -277,6 +277,9 @@ pub fn load_desc(spec: &str) -> Result<SceneDesc, String> {
         .map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
         Some("obj") => {
+            if path.is_dir() {
+                return Err(format!("{spec}: is a directory, not an OBJ file"));
+            }
             if !path.is_file() {
                 return Err(format!("{spec}: no such file"));
             }

@@ -85,9 +85,12 @@ pub fn load(path: &Path) -> Result<SceneDesc, String> {
 
 /// First line of a TOML error, with the file name and line.
 fn toml_error(file: &str, text: &str, e: toml::de::Error) -> String {
-    let line = e
-        .span()
-        .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+    // 1 + the newlines before the span (the span may start a line, or not be on a
+    // char boundary, so count bytes rather than `lines()` of a slice)
+    let line = e.span().map(|s| {
+        let before = &text.as_bytes()[..s.start.min(text.len())];
+        before.iter().filter(|&&b| b == b'\n').count() + 1
+    });
     let msg = e.message().replace('\n', " ");
     match line {
         Some(l) => format!("{file}:{l}: {msg}"),
@@ -119,7 +122,7 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             Some(Scale::Axes(a)) => Vec3::from(a),
         };
         if !(t.is_finite() && s.is_finite() && r.iter().all(|x| x.is_finite()))
-            || s.min_element().abs() == 0.0
+            || s.abs().min_element() == 0.0
         {
             return Err(format!(
                 "{file}: object {}: transform values must be finite and scale non-zero",
@@ -187,6 +190,20 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
         desc.camera = Some(c);
     }
     if let Some(r) = sf.render {
+        if let Some([w, h]) = r.res {
+            crate::film::check_resolution(w, h)
+                .map_err(|e| format!("{file}: [render] res: {e}"))?;
+        }
+        if r.spp == Some(0) {
+            return Err(format!("{file}: [render] spp: must be at least 1"));
+        }
+        if let Some(d) = r.max_depth {
+            if d < -1 || d == 0 {
+                return Err(format!(
+                    "{file}: [render] max_depth: {d}: must be -1 (unlimited) or at least 1"
+                ));
+            }
+        }
         desc.defaults = RenderDefaults {
             res: r.res.map(|[w, h]| (w, h)),
             spp: r.spp,
