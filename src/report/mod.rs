@@ -63,6 +63,8 @@ where
         .map_err(e)?;
     chart
         .configure_mesh()
+        .x_labels(8)
+        .y_labels(8)
         .x_desc(&p.x_label)
         .y_desc(&p.y_label)
         .label_style(("sans-serif", 14))
