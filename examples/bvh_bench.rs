@@ -238,15 +238,6 @@ fn bench_kalos(name: &str, pool: &rayon::ThreadPool, tris: &[[Vec3; 3]], rays: &
         bvh.node_count(),
         bvh.memory_bytes() as f64 / (1 << 20) as f64
     );
-    if std::env::var_os("STATS").is_some() {
-        let (mut n, mut t) = (0u64, 0u64);
-        for r in &rays.closest[..100000] {
-            let s = bvh.debug_stats(r, f32::INFINITY);
-            n += s.0 as u64;
-            t += s.1 as u64;
-        }
-        println!("STATS nodes/ray {} tris/ray {}", n as f64 / 1e5, t as f64 / 1e5);
-    }
     let r = time_rays(pool, &rays.closest, |r| {
         bvh.intersect(r, f32::INFINITY).map(|h| h.t)
     });

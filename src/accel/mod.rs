@@ -15,6 +15,7 @@
 mod build;
 
 use crate::math::{Bounds3, Ray, Vec3};
+use glam::Vec4;
 use rayon::prelude::*;
 
 /// Closest-hit record.
@@ -122,83 +123,146 @@ impl Tri {
     }
 }
 
+/// Four-wide BVH node (128 bytes, one per two cache lines): the boxes of up
+/// to four children in SoA form, lanes = children, and their references.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Node4 {
+    /// min.x, min.y, min.z, max.x, max.y, max.z of the four children.
+    b: [Vec4; 6],
+    /// Child references (see [`LEAF`]); unused slots have empty boxes.
+    child: [u32; 4],
+}
+
+/// Child reference flag: a leaf with triangles `first .. first + count`,
+/// encoded as `LEAF | first << 2 | (count - 1)`. Otherwise a `Node4` index.
+const LEAF: u32 = 1 << 31;
+const _: () = assert!(build::MAX_LEAF <= 4);
+
+#[inline(always)]
+fn leaf_ref(first: u32, count: u32) -> u32 {
+    debug_assert!((1..=4).contains(&count) && first < 1 << 29);
+    LEAF | first << 2 | (count - 1)
+}
+
+#[inline(always)]
+fn leaf_range(r: u32) -> std::ops::Range<usize> {
+    let first = ((r & !LEAF) >> 2) as usize;
+    first..first + (r & 3) as usize + 1
+}
+
 /// Bounding volume hierarchy over a triangle soup.
 #[derive(Clone, Debug)]
 pub struct Bvh {
-    nodes: Vec<Node>,
+    nodes: Vec<Node4>,
+    /// Reference to the root (a `Node4` index or a leaf); unused if empty.
+    root: u32,
+    bounds: Bounds3,
+    /// Traversal stack entries a query may need (computed at build time).
+    stack_needed: usize,
+    leaf_count: usize,
     /// Triangles in leaf order.
     tris: Vec<Tri>,
     /// Input index of each triangle in `tris`.
     prim_ids: Vec<u32>,
 }
 
-/// Traversal stack size; the builder bounds the tree depth below this.
-const STACK: usize = 64;
 /// Slack on the far slab distance that makes the box test conservative
 /// despite rounding (1 + 2γ₃, Ize 2013).
 const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
-#[inline(always)]
-fn fmin(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
-#[inline(always)]
-fn fmax(a: f32, b: f32) -> f32 {
-    if a > b {
-        a
-    } else {
-        b
-    }
-}
-
-/// Per-ray precomputation for the slab test.
+/// Per-ray precomputation for the 4-wide slab test.
 #[derive(Clone, Copy)]
 struct RayData {
     o: Vec3,
     d: Vec3,
-    inv: Vec3,
+    ox: Vec4,
+    oy: Vec4,
+    oz: Vec4,
+    ix: Vec4,
+    iy: Vec4,
+    iz: Vec4,
+    /// Index in `Node4::b` of the near plane per axis (far = near ± 3).
+    near: [usize; 3],
+    far: [usize; 3],
 }
 
 impl RayData {
     #[inline(always)]
     fn new(ray: &Ray) -> Self {
         // Zero components give ±inf; replace them with ±MAX so that
-        // `0 * inv` is 0 (never NaN) and the slab test stays conservative.
+        // `0 * inv` is 0 (never NaN).
         let inv = 1.0 / ray.d;
         let fix = |x: f32| if x.is_finite() { x } else { f32::MAX.copysign(x) };
+        let inv = Vec3::new(fix(inv.x), fix(inv.y), fix(inv.z));
+        let near = [
+            if inv.x < 0.0 { 3 } else { 0 },
+            if inv.y < 0.0 { 4 } else { 1 },
+            if inv.z < 0.0 { 5 } else { 2 },
+        ];
         RayData {
             o: ray.o,
             d: ray.d,
-            inv: Vec3::new(fix(inv.x), fix(inv.y), fix(inv.z)),
+            ox: Vec4::splat(ray.o.x),
+            oy: Vec4::splat(ray.o.y),
+            oz: Vec4::splat(ray.o.z),
+            ix: Vec4::splat(inv.x),
+            iy: Vec4::splat(inv.y),
+            iz: Vec4::splat(inv.z),
+            near,
+            far: near.map(|i| if i >= 3 { i - 3 } else { i + 3 }),
         }
     }
 
-    /// Entry distance into the node's box if the ray overlaps it within
-    /// `(0, t_max)`, else `f32::INFINITY`.
+    /// Entry distances of the four child boxes and the mask (bit i = lane i)
+    /// of those the ray overlaps within `(0, t_max)`.
     #[inline(always)]
-    fn slab(&self, n: &Node, t_max: f32) -> f32 {
-        let x0 = (n.min.x - self.o.x) * self.inv.x;
-        let x1 = (n.max.x - self.o.x) * self.inv.x;
-        let y0 = (n.min.y - self.o.y) * self.inv.y;
-        let y1 = (n.max.y - self.o.y) * self.inv.y;
-        let z0 = (n.min.z - self.o.z) * self.inv.z;
-        let z1 = (n.max.z - self.o.z) * self.inv.z;
-        let tn = fmax(fmax(fmin(x0, x1), fmin(y0, y1)), fmax(fmin(z0, z1), 0.0));
-        let tf = fmin(fmin(fmax(x0, x1), fmax(y0, y1)), fmin(fmax(z0, z1), t_max));
-        if tn <= tf * ROBUST {
-            tn
-        } else {
-            f32::INFINITY
-        }
+    fn slab4(&self, n: &Node4, t_max: f32) -> (Vec4, u32) {
+        let b = &n.b;
+        let tnx = (b[self.near[0]] - self.ox) * self.ix;
+        let tny = (b[self.near[1]] - self.oy) * self.iy;
+        let tnz = (b[self.near[2]] - self.oz) * self.iz;
+        let tfx = (b[self.far[0]] - self.ox) * self.ix;
+        let tfy = (b[self.far[1]] - self.oy) * self.iy;
+        let tfz = (b[self.far[2]] - self.oz) * self.iz;
+        let tn = tnx.max(tny).max(tnz.max(Vec4::ZERO));
+        let tf = tfx.min(tfy).min(tfz.min(Vec4::splat(t_max)));
+        (tn, tn.cmple(tf * ROBUST).bitmask())
     }
 }
 
+/// Traversal stack (node reference, entry distance).
+struct Stack<const N: usize> {
+    r: [u32; N],
+    t: [f32; N],
+    sp: usize,
+}
+
+impl<const N: usize> Stack<N> {
+    #[inline(always)]
+    fn new() -> Self {
+        Stack {
+            r: [0; N],
+            t: [0.0; N],
+            sp: 0,
+        }
+    }
+    #[inline(always)]
+    fn push(&mut self, r: u32, t: f32) {
+        self.r[self.sp] = r;
+        self.t[self.sp] = t;
+        self.sp += 1;
+    }
+}
+
+/// Small stack used when the tree allows it; the large one always suffices
+/// (see `Bvh::build`).
+const SMALL_STACK: usize = 64;
+const LARGE_STACK: usize = 3 * 64;
+
 impl Bvh {
-    /// Builds the BVH with binned SAH (parallel with rayon on large inputs).
+    /// Builds the BVH with binned SAH (parallel with rayon on large inputs),
+    /// then collapses it into a 4-wide BVH.
     pub fn build(tris: &[[Vec3; 3]]) -> Bvh {
         let mut refs: Vec<build::PrimRef> = tris
             .par_iter()
@@ -218,11 +282,26 @@ impl Bvh {
         if refs.is_empty() {
             return Bvh {
                 nodes: Vec::new(),
+                root: 0,
+                bounds: Bounds3::EMPTY,
+                stack_needed: 0,
+                leaf_count: 0,
                 tris: Vec::new(),
                 prim_ids: Vec::new(),
             };
         }
-        let nodes = build::build(&mut refs);
+        assert!(refs.len() < 1 << 29, "too many triangles for one BVH");
+        let nodes2 = build::build(&mut refs);
+        let bounds = Bounds3 {
+            min: nodes2[0].min,
+            max: nodes2[0].max,
+        };
+        let mut nodes = Vec::with_capacity(nodes2.len() / 2 + 1);
+        let (root, stack_needed) = collapse(&nodes2, 0, &mut nodes);
+        // Every 4-wide node spans at least one BVH2 level on every path and
+        // the BVH2 depth is bounded by the builder, so this always holds.
+        assert!(stack_needed <= LARGE_STACK);
+        nodes.shrink_to_fit();
         let leaf_tris = refs
             .par_iter()
             .with_min_len(4096)
@@ -231,6 +310,10 @@ impl Bvh {
         let prim_ids = refs.iter().map(|r| r.idx).collect();
         Bvh {
             nodes,
+            root,
+            bounds,
+            stack_needed,
+            leaf_count: nodes2.iter().filter(|n| n.is_leaf()).count(),
             tris: leaf_tris,
             prim_ids,
         }
@@ -238,60 +321,86 @@ impl Bvh {
 
     /// Closest hit with `t` in `(0, t_max)`.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        let Some(root) = self.nodes.first() else {
-            return None;
-        };
-        let r = RayData::new(ray);
-        let mut t_best = t_max;
-        if !(r.slab(root, t_best) < f32::INFINITY) {
+        if self.tris.is_empty() {
             return None;
         }
+        if self.stack_needed <= SMALL_STACK {
+            self.intersect_impl::<SMALL_STACK>(ray, t_max)
+        } else {
+            self.intersect_impl::<LARGE_STACK>(ray, t_max)
+        }
+    }
+
+    /// Whether anything is hit with `t` in `(0, t_max)` (stops at the first hit).
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        if self.tris.is_empty() {
+            return false;
+        }
+        if self.stack_needed <= SMALL_STACK {
+            self.occluded_impl::<SMALL_STACK>(ray, t_max)
+        } else {
+            self.occluded_impl::<LARGE_STACK>(ray, t_max)
+        }
+    }
+
+    #[inline(always)]
+    fn intersect_impl<const N: usize>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let r = RayData::new(ray);
+        let mut t_best = t_max;
         let mut best = (u32::MAX, 0.0f32, 0.0f32);
-        let mut stack = [(0u32, 0.0f32); STACK];
-        let mut sp = 0usize;
-        let mut ni = 0usize;
+        let mut stack = Stack::<N>::new();
+        let mut cur = self.root;
         'outer: loop {
-            let node = &self.nodes[ni];
-            if node.is_leaf() {
-                let first = node.a as usize;
-                let last = first + node.count as usize;
-                for (i, tri) in self.tris[first..last].iter().enumerate() {
+            if cur & LEAF == 0 {
+                let node = &self.nodes[cur as usize];
+                let (tn, mask) = r.slab4(node, t_best);
+                if mask != 0 {
+                    let tn = tn.to_array();
+                    if mask & (mask - 1) == 0 {
+                        // Exactly one child hit.
+                        cur = node.child[mask.trailing_zeros() as usize];
+                        continue;
+                    }
+                    // Two or more: push all but the nearest, farthest first.
+                    let mut m = mask;
+                    let mut ids = [0usize; 4];
+                    let mut k = 0;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        // Insertion sort by decreasing distance.
+                        let mut j = k;
+                        while j > 0 && tn[ids[j - 1]] < tn[i] {
+                            ids[j] = ids[j - 1];
+                            j -= 1;
+                        }
+                        ids[j] = i;
+                        k += 1;
+                    }
+                    for &i in &ids[..k - 1] {
+                        stack.push(node.child[i], tn[i]);
+                    }
+                    cur = node.child[ids[k - 1]];
+                    continue;
+                }
+            } else {
+                let range = leaf_range(cur);
+                let first = range.start;
+                for (i, tri) in self.tris[range].iter().enumerate() {
                     if let Some((t, u, v)) = tri.intersect(r.o, r.d, t_best) {
                         t_best = t;
                         best = ((first + i) as u32, u, v);
                     }
                 }
-            } else {
-                let c = node.a as usize;
-                let t0 = r.slab(&self.nodes[c], t_best);
-                let t1 = r.slab(&self.nodes[c + 1], t_best);
-                if t0 <= t1 {
-                    if t0 < f32::INFINITY {
-                        ni = c;
-                        if t1 < f32::INFINITY {
-                            stack[sp] = ((c + 1) as u32, t1);
-                            sp += 1;
-                        }
-                        continue;
-                    }
-                } else {
-                    ni = c + 1;
-                    if t0 < f32::INFINITY {
-                        stack[sp] = (c as u32, t0);
-                        sp += 1;
-                    }
-                    continue;
-                }
             }
             // Pop the next node that may still hold a closer hit.
             loop {
-                if sp == 0 {
+                if stack.sp == 0 {
                     break 'outer;
                 }
-                sp -= 1;
-                let (n, tn) = stack[sp];
-                if tn <= t_best * ROBUST {
-                    ni = n as usize;
+                stack.sp -= 1;
+                if stack.t[stack.sp] <= t_best * ROBUST {
+                    cur = stack.r[stack.sp];
                     break;
                 }
             }
@@ -307,108 +416,121 @@ impl Bvh {
         })
     }
 
-    /// Whether anything is hit with `t` in `(0, t_max)` (stops at the first hit).
-    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        let Some(root) = self.nodes.first() else {
-            return false;
-        };
+    #[inline(always)]
+    fn occluded_impl<const N: usize>(&self, ray: &Ray, t_max: f32) -> bool {
         let r = RayData::new(ray);
-        if !(r.slab(root, t_max) < f32::INFINITY) {
-            return false;
-        }
-        let mut stack = [0u32; STACK];
-        let mut sp = 0usize;
-        let mut ni = 0usize;
+        let mut stack = Stack::<N>::new();
+        let mut cur = self.root;
         loop {
-            let node = &self.nodes[ni];
-            if node.is_leaf() {
-                let first = node.a as usize;
-                let last = first + node.count as usize;
-                for tri in &self.tris[first..last] {
+            if cur & LEAF == 0 {
+                let node = &self.nodes[cur as usize];
+                let (_, mask) = r.slab4(node, t_max);
+                if mask != 0 {
+                    // Any order will do; push all but the first.
+                    let mut m = mask;
+                    let first = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        stack.push(node.child[i], 0.0);
+                    }
+                    cur = node.child[first];
+                    continue;
+                }
+            } else {
+                for tri in &self.tris[leaf_range(cur)] {
                     if tri.intersect(r.o, r.d, t_max).is_some() {
                         return true;
                     }
                 }
-            } else {
-                let c = node.a as usize;
-                let t0 = r.slab(&self.nodes[c], t_max);
-                let t1 = r.slab(&self.nodes[c + 1], t_max);
-                if t0 <= t1 {
-                    if t0 < f32::INFINITY {
-                        ni = c;
-                        if t1 < f32::INFINITY {
-                            stack[sp] = (c + 1) as u32;
-                            sp += 1;
-                        }
-                        continue;
-                    }
-                } else {
-                    ni = c + 1;
-                    if t0 < f32::INFINITY {
-                        stack[sp] = c as u32;
-                        sp += 1;
-                    }
-                    continue;
-                }
             }
-            if sp == 0 {
+            if stack.sp == 0 {
                 return false;
             }
-            sp -= 1;
-            ni = stack[sp] as usize;
+            stack.sp -= 1;
+            cur = stack.r[stack.sp];
         }
-    }
-
-    #[doc(hidden)]
-    pub fn debug_stats(&self, ray: &Ray, t_max: f32) -> (u32, u32) {
-        let r = RayData::new(ray);
-        let mut t_best = t_max;
-        let (mut nodes, mut tris) = (0u32, 0u32);
-        let mut stack = vec![(0usize, 0.0f32)];
-        let mut order = Vec::new();
-        if self.nodes.is_empty() || r.slab(&self.nodes[0], t_best) == f32::INFINITY { return (0,0); }
-        while let Some((ni, tn)) = stack.pop() {
-            if tn > t_best * ROBUST { continue; }
-            let node = &self.nodes[ni];
-            nodes += 1;
-            if node.is_leaf() {
-                for tri in &self.tris[node.a as usize..(node.a + node.count) as usize] {
-                    tris += 1;
-                    if let Some((t, _, _)) = tri.intersect(r.o, r.d, t_best) { t_best = t; }
-                }
-            } else {
-                order.clear();
-                for c in [node.a as usize, node.a as usize + 1] {
-                    let t = r.slab(&self.nodes[c], t_best);
-                    if t < f32::INFINITY { order.push((c, t)); }
-                }
-                order.sort_by(|a, b| b.1.total_cmp(&a.1));
-                stack.extend(order.iter().copied());
-            }
-        }
-        (nodes, tris)
     }
 
     /// Bounds of all non-degenerate triangles (empty for an empty BVH).
     pub fn bounds(&self) -> Bounds3 {
-        self.nodes.first().map_or(Bounds3::EMPTY, |n| Bounds3 {
-            min: n.min,
-            max: n.max,
-        })
+        self.bounds
     }
 
-    /// Number of BVH nodes (interior and leaves).
+    /// Number of nodes: 4-wide interior nodes plus leaves (leaves are stored
+    /// inline in their parents' child references, so only the former take
+    /// node memory).
     pub fn node_count(&self) -> usize {
-        self.nodes.len()
+        self.nodes.len() + self.leaf_count
     }
 
     /// Heap plus inline memory used by the structure, in bytes.
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
-            + self.nodes.capacity() * std::mem::size_of::<Node>()
+            + self.nodes.capacity() * std::mem::size_of::<Node4>()
             + self.tris.capacity() * std::mem::size_of::<Tri>()
             + self.prim_ids.capacity() * std::mem::size_of::<u32>()
     }
+}
+
+/// Collapses the BVH2 subtree at `i` (an interior node) into 4-wide nodes
+/// appended to `out`. Returns its reference and the number of traversal stack
+/// entries a query below it may need.
+fn collapse(n2: &[Node], i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
+    let n = &n2[i];
+    if n.is_leaf() {
+        return (leaf_ref(n.a, n.count), 0);
+    }
+    // Open the interior child with the largest surface area until there are
+    // four children (or only leaves).
+    let mut kids: Vec<usize> = vec![n.a as usize, n.a as usize + 1];
+    while kids.len() < 4 {
+        let area = |k: usize| {
+            Bounds3 {
+                min: n2[k].min,
+                max: n2[k].max,
+            }
+            .half_area()
+        };
+        let Some(pos) = (0..kids.len())
+            .filter(|&p| !n2[kids[p]].is_leaf())
+            .max_by(|&a, &b| area(kids[a]).total_cmp(&area(kids[b])))
+        else {
+            break;
+        };
+        let k = kids.swap_remove(pos);
+        kids.push(n2[k].a as usize);
+        kids.push(n2[k].a as usize + 1);
+    }
+    let idx = out.len();
+    out.push(Node4 {
+        b: [
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+        ],
+        child: [0; 4],
+    });
+    let mut b = out[idx].b.map(|v| v.to_array());
+    let mut child = [0u32; 4];
+    let mut stack_needed = 0;
+    for (lane, &k) in kids.iter().enumerate() {
+        let c = &n2[k];
+        for a in 0..3 {
+            b[a][lane] = c.min[a];
+            b[a + 3][lane] = c.max[a];
+        }
+        let (r, s) = collapse(n2, k, out);
+        child[lane] = r;
+        stack_needed = stack_needed.max(s);
+    }
+    out[idx].b = b.map(Vec4::from_array);
+    out[idx].child = child;
+    (idx as u32, stack_needed + kids.len() - 1)
 }
 
 #[cfg(test)]

@@ -136,42 +136,52 @@ fn check_against_brute(tris: &[[Vec3; 3]], rays: usize, seed: u64) -> (usize, us
 }
 
 /// Node bounds contain their children/triangles, every non-degenerate
-/// triangle is referenced exactly once, and the depth fits the stack.
+/// triangle is referenced exactly once, and the stack bound holds.
 fn check_structure(bvh: &Bvh) {
-    if bvh.nodes.is_empty() {
-        assert!(bvh.tris.is_empty());
+    if bvh.tris.is_empty() {
+        assert!(bvh.nodes.is_empty());
         return;
     }
+    assert!(bvh.stack_needed <= LARGE_STACK);
     let mut seen = vec![0u32; bvh.tris.len()];
-    let mut stack = vec![(0usize, 1usize)];
-    let mut max_depth = 0;
-    let contains = |outer: &Node, min: Vec3, max: Vec3| {
-        outer.min.cmple(min).all() && outer.max.cmpge(max).all()
+    let b = bvh.bounds();
+    let mut stack = vec![(bvh.root, b.min, b.max)];
+    let mut leaves = 0;
+    let inside = |p: Vec3, min: Vec3, max: Vec3| {
+        // (v0 + e1 may round differently from v1.)
+        let tol = (p.abs() + 1.0) * 1e-6;
+        min.cmple(p + tol).all() && max.cmpge(p - tol).all()
     };
-    while let Some((i, depth)) = stack.pop() {
-        max_depth = max_depth.max(depth);
-        let n = bvh.nodes[i];
-        if n.is_leaf() {
-            assert!(n.count as usize <= build::MAX_LEAF);
-            for k in n.a..n.a + n.count {
-                seen[k as usize] += 1;
-                let t = bvh.tris[k as usize];
+    while let Some((r, min, max)) = stack.pop() {
+        if r & LEAF != 0 {
+            leaves += 1;
+            let range = leaf_range(r);
+            assert!(range.len() <= build::MAX_LEAF);
+            for k in range {
+                seen[k] += 1;
+                let t = bvh.tris[k];
                 for p in [t.v0, t.v0 + t.e1, t.v0 + t.e2] {
-                    // (v0 + e1 may round differently from v1.)
-                    let tol = (p.abs() + 1.0) * 1e-6;
-                    assert!(contains(&n, p + tol, p - tol));
+                    assert!(inside(p, min, max));
                 }
             }
         } else {
-            for c in [n.a as usize, n.a as usize + 1] {
-                let ch = bvh.nodes[c];
-                assert!(contains(&n, ch.min, ch.max));
-                stack.push((c, depth + 1));
+            let n = &bvh.nodes[r as usize];
+            let mut used = 0;
+            for lane in 0..4 {
+                let cmin = Vec3::new(n.b[0][lane], n.b[1][lane], n.b[2][lane]);
+                let cmax = Vec3::new(n.b[3][lane], n.b[4][lane], n.b[5][lane]);
+                if cmin.x > cmax.x {
+                    continue; // unused slot
+                }
+                used += 1;
+                assert!(min.cmple(cmin).all() && max.cmpge(cmax).all());
+                stack.push((n.child[lane], cmin, cmax));
             }
+            assert!(used >= 2);
         }
     }
+    assert_eq!(leaves + bvh.nodes.len(), bvh.node_count());
     assert!(seen.iter().all(|&s| s == 1));
-    assert!(max_depth <= STACK, "depth {max_depth}");
 }
 
 #[test]
@@ -270,6 +280,7 @@ fn single_triangle_edge_cases() {
     let tri = [[Vec3::ZERO, Vec3::X, Vec3::Y]];
     let bvh = Bvh::build(&tri);
     assert_eq!(bvh.node_count(), 1);
+    assert_eq!(bvh.nodes.len(), 0);
     assert_eq!(bvh.bounds().min, Vec3::ZERO);
     assert_eq!(bvh.bounds().max, Vec3::new(1.0, 1.0, 0.0));
     let down = Ray::new(Vec3::new(0.25, 0.5, 1.0), Vec3::new(0.0, 0.0, -1.0));
