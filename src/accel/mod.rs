@@ -94,9 +94,10 @@ impl Tri {
         !(finite && self.e1.cross(self.e2).length_squared() > 0.0)
     }
 
-    /// Möller–Trumbore, double-sided. Returns `(t, b1, b2)` for a hit with
+    /// Möller–Trumbore, double-sided (the scalar reference for [`Tri4`], used
+    /// by the tests' brute force). Returns `(t, b1, b2)` for a hit with
     /// `0 < t < t_max`.
-    #[inline(always)]
+    #[cfg(test)]
     fn intersect(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<(f32, f32, f32)> {
         let p = d.cross(self.e2);
         let det = self.e1.dot(p);
@@ -123,6 +124,70 @@ impl Tri {
     }
 }
 
+/// Up to four triangles in SoA form (lanes), for a 4-wide Möller–Trumbore
+/// test. Unused lanes are masked out by the leaf's count.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+struct Tri4 {
+    v0: [Vec4; 3],
+    e1: [Vec4; 3],
+    e2: [Vec4; 3],
+}
+
+impl Tri4 {
+    fn new(tris: &[Tri]) -> Tri4 {
+        debug_assert!(tris.len() <= 4);
+        let mut a = [[[0.0f32; 4]; 3]; 3];
+        for (lane, t) in tris.iter().enumerate() {
+            for (k, v) in [t.v0, t.e1, t.e2].iter().enumerate() {
+                for axis in 0..3 {
+                    a[k][axis][lane] = v[axis];
+                }
+            }
+        }
+        let v = |k: usize| a[k].map(Vec4::from_array);
+        Tri4 {
+            v0: v(0),
+            e1: v(1),
+            e2: v(2),
+        }
+    }
+
+    /// Mask (bit = lane) of the lanes in `valid` hit with `0 < t < t_max`,
+    /// and their `t, b1, b2`. Operation for operation the same as
+    /// [`Tri::intersect`], so results agree bit for bit.
+    #[inline(always)]
+    fn intersect(&self, r: &RayData, t_max: f32, valid: u32) -> (u32, Vec4, Vec4, Vec4) {
+        let [e1x, e1y, e1z] = self.e1;
+        let [e2x, e2y, e2z] = self.e2;
+        let (dx, dy, dz) = (r.dx, r.dy, r.dz);
+        // p = d × e2
+        let px = dy * e2z - e2y * dz;
+        let py = dz * e2x - e2z * dx;
+        let pz = dx * e2y - e2x * dy;
+        let det = e1x * px + e1y * py + e1z * pz;
+        let inv = Vec4::ONE / det;
+        let sx = r.ox - self.v0[0];
+        let sy = r.oy - self.v0[1];
+        let sz = r.oz - self.v0[2];
+        let u = (sx * px + sy * py + sz * pz) * inv;
+        // q = s × e1
+        let qx = sy * e1z - e1y * sz;
+        let qy = sz * e1x - e1z * sx;
+        let qz = sx * e1y - e1x * sy;
+        let v = (dx * qx + dy * qy + dz * qz) * inv;
+        let t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+        let ok = det.cmpne(Vec4::ZERO)
+            & u.cmpge(Vec4::ZERO)
+            & u.cmple(Vec4::ONE)
+            & v.cmpge(Vec4::ZERO)
+            & (u + v).cmple(Vec4::ONE)
+            & t.cmpgt(Vec4::ZERO)
+            & t.cmplt(Vec4::splat(t_max));
+        (ok.bitmask() & valid, t, u, v)
+    }
+}
+
 /// Four-wide BVH node (128 bytes, one per two cache lines): the boxes of up
 /// to four children in SoA form, lanes = children, and their references.
 #[derive(Clone, Copy, Debug)]
@@ -134,8 +199,9 @@ struct Node4 {
     child: [u32; 4],
 }
 
-/// Child reference flag: a leaf with triangles `first .. first + count`,
-/// encoded as `LEAF | first << 2 | (count - 1)`. Otherwise a `Node4` index.
+/// Child reference flag: a leaf, encoded as `LEAF | packet << 2 | (count - 1)`
+/// (its triangles are the first `count` lanes of `Tri4` packet `packet`).
+/// Otherwise a `Node4` index.
 const LEAF: u32 = 1 << 31;
 const _: () = assert!(build::MAX_LEAF <= 4);
 
@@ -145,10 +211,10 @@ fn leaf_ref(first: u32, count: u32) -> u32 {
     LEAF | first << 2 | (count - 1)
 }
 
+/// Packet index and lane mask of a leaf reference.
 #[inline(always)]
-fn leaf_range(r: u32) -> std::ops::Range<usize> {
-    let first = ((r & !LEAF) >> 2) as usize;
-    first..first + (r & 3) as usize + 1
+fn leaf_packet(r: u32) -> (usize, u32) {
+    (((r & !LEAF) >> 2) as usize, (2u32 << (r & 3)) - 1)
 }
 
 /// Bounding volume hierarchy over a triangle soup.
@@ -161,9 +227,9 @@ pub struct Bvh {
     /// Traversal stack entries a query may need (computed at build time).
     stack_needed: usize,
     leaf_count: usize,
-    /// Triangles in leaf order.
-    tris: Vec<Tri>,
-    /// Input index of each triangle in `tris`.
+    /// Triangle packets, one per leaf, in traversal order.
+    tris: Vec<Tri4>,
+    /// Input index of each packet lane (`u32::MAX` for unused lanes).
     prim_ids: Vec<u32>,
 }
 
@@ -174,11 +240,12 @@ const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::E
 /// Per-ray precomputation for the 4-wide slab test.
 #[derive(Clone, Copy)]
 struct RayData {
-    o: Vec3,
-    d: Vec3,
     ox: Vec4,
     oy: Vec4,
     oz: Vec4,
+    dx: Vec4,
+    dy: Vec4,
+    dz: Vec4,
     ix: Vec4,
     iy: Vec4,
     iz: Vec4,
@@ -201,11 +268,12 @@ impl RayData {
             if inv.z < 0.0 { 5 } else { 2 },
         ];
         RayData {
-            o: ray.o,
-            d: ray.d,
             ox: Vec4::splat(ray.o.x),
             oy: Vec4::splat(ray.o.y),
             oz: Vec4::splat(ray.o.z),
+            dx: Vec4::splat(ray.d.x),
+            dy: Vec4::splat(ray.d.y),
+            dz: Vec4::splat(ray.d.z),
             ix: Vec4::splat(inv.x),
             iy: Vec4::splat(inv.y),
             iz: Vec4::splat(inv.z),
@@ -296,25 +364,35 @@ impl Bvh {
             min: nodes2[0].min,
             max: nodes2[0].max,
         };
-        let mut nodes = Vec::with_capacity(nodes2.len() / 2 + 1);
-        let (root, stack_needed) = collapse(&nodes2, 0, &mut nodes);
+        let mut c = Collapse {
+            n2: &nodes2,
+            refs: &refs,
+            input: tris,
+            nodes: Vec::with_capacity(nodes2.len() / 2 + 1),
+            packets: Vec::with_capacity(nodes2.len() / 2 + 1),
+            prim_ids: Vec::with_capacity(2 * nodes2.len() + 4),
+        };
+        let (root, stack_needed) = c.collapse(0);
+        let Collapse {
+            mut nodes,
+            packets,
+            prim_ids,
+            ..
+        } = c;
         // Every 4-wide node spans at least one BVH2 level on every path and
         // the BVH2 depth is bounded by the builder, so this always holds.
         assert!(stack_needed <= LARGE_STACK);
         nodes.shrink_to_fit();
-        let leaf_tris = refs
-            .par_iter()
-            .with_min_len(4096)
-            .map(|r| Tri::new(&tris[r.idx as usize]))
-            .collect();
-        let prim_ids = refs.iter().map(|r| r.idx).collect();
+        if std::env::var_os("BVH_DEBUG").is_some() {
+            eprintln!("nodes4 {} packets {} tris {} fill {:.2} stack {}", nodes.len(), packets.len(), refs.len(), refs.len() as f64 / packets.len() as f64, stack_needed);
+        }
         Bvh {
             nodes,
             root,
             bounds,
             stack_needed,
-            leaf_count: nodes2.iter().filter(|n| n.is_leaf()).count(),
-            tris: leaf_tris,
+            leaf_count: packets.len(),
+            tris: packets,
             prim_ids,
         }
     }
@@ -384,13 +462,21 @@ impl Bvh {
                     continue;
                 }
             } else {
-                let range = leaf_range(cur);
-                let first = range.start;
-                for (i, tri) in self.tris[range].iter().enumerate() {
-                    if let Some((t, u, v)) = tri.intersect(r.o, r.d, t_best) {
-                        t_best = t;
-                        best = ((first + i) as u32, u, v);
+                let (p, valid) = leaf_packet(cur);
+                let (mut m, t, u, v) = self.tris[p].intersect(&r, t_best, valid);
+                if m != 0 {
+                    let t = t.to_array();
+                    let mut lane = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        if t[i] < t[lane] {
+                            lane = i;
+                        }
                     }
+                    t_best = t[lane];
+                    best = ((4 * p + lane) as u32, u.to_array()[lane], v.to_array()[lane]);
                 }
             }
             // Pop the next node that may still hold a closer hit.
@@ -439,10 +525,9 @@ impl Bvh {
                     continue;
                 }
             } else {
-                for tri in &self.tris[leaf_range(cur)] {
-                    if tri.intersect(r.o, r.d, t_max).is_some() {
-                        return true;
-                    }
+                let (p, valid) = leaf_packet(cur);
+                if self.tris[p].intersect(&r, t_max, valid).0 != 0 {
+                    return true;
                 }
             }
             if stack.sp == 0 {
@@ -469,23 +554,44 @@ impl Bvh {
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
             + self.nodes.capacity() * std::mem::size_of::<Node4>()
-            + self.tris.capacity() * std::mem::size_of::<Tri>()
+            + self.tris.capacity() * std::mem::size_of::<Tri4>()
             + self.prim_ids.capacity() * std::mem::size_of::<u32>()
     }
 }
 
-/// Collapses the BVH2 subtree at `i` (an interior node) into 4-wide nodes
-/// appended to `out`. Returns its reference and the number of traversal stack
-/// entries a query below it may need.
-fn collapse(n2: &[Node], i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
-    let n = &n2[i];
-    if n.is_leaf() {
-        return (leaf_ref(n.a, n.count), 0);
-    }
-    // Open the interior child with the largest surface area until there are
-    // four children (or only leaves).
-    let mut kids: Vec<usize> = vec![n.a as usize, n.a as usize + 1];
-    while kids.len() < 4 {
+/// BVH2 → 4-wide BVH conversion state.
+struct Collapse<'a> {
+    n2: &'a [Node],
+    /// Primitive references in BVH2 leaf order.
+    refs: &'a [build::PrimRef],
+    input: &'a [[Vec3; 3]],
+    nodes: Vec<Node4>,
+    packets: Vec<Tri4>,
+    prim_ids: Vec<u32>,
+}
+
+impl Collapse<'_> {
+    /// Collapses the BVH2 subtree at `i` into 4-wide nodes and triangle
+    /// packets, both laid out depth-first. Returns its reference and the
+    /// number of traversal stack entries a query below it may need.
+    fn collapse(&mut self, i: usize) -> (u32, usize) {
+        let n2 = self.n2;
+        let n = &n2[i];
+        if n.is_leaf() {
+            let refs = &self.refs[n.a as usize..(n.a + n.count) as usize];
+            let tris: Vec<Tri> = refs
+                .iter()
+                .map(|r| Tri::new(&self.input[r.idx as usize]))
+                .collect();
+            let p = self.packets.len() as u32;
+            self.packets.push(Tri4::new(&tris));
+            for lane in 0..4 {
+                self.prim_ids.push(refs.get(lane).map_or(u32::MAX, |r| r.idx));
+            }
+            return (leaf_ref(p, n.count), 0);
+        }
+        // Open the interior child with the largest surface area until there
+        // are four children (or only leaves).
         let area = |k: usize| {
             Bounds3 {
                 min: n2[k].min,
@@ -493,44 +599,38 @@ fn collapse(n2: &[Node], i: usize, out: &mut Vec<Node4>) -> (u32, usize) {
             }
             .half_area()
         };
-        let Some(pos) = (0..kids.len())
-            .filter(|&p| !n2[kids[p]].is_leaf())
-            .max_by(|&a, &b| area(kids[a]).total_cmp(&area(kids[b])))
-        else {
-            break;
-        };
-        let k = kids.swap_remove(pos);
-        kids.push(n2[k].a as usize);
-        kids.push(n2[k].a as usize + 1);
-    }
-    let idx = out.len();
-    out.push(Node4 {
-        b: [
-            Vec4::INFINITY,
-            Vec4::INFINITY,
-            Vec4::INFINITY,
-            Vec4::NEG_INFINITY,
-            Vec4::NEG_INFINITY,
-            Vec4::NEG_INFINITY,
-        ],
-        child: [0; 4],
-    });
-    let mut b = out[idx].b.map(|v| v.to_array());
-    let mut child = [0u32; 4];
-    let mut stack_needed = 0;
-    for (lane, &k) in kids.iter().enumerate() {
-        let c = &n2[k];
-        for a in 0..3 {
-            b[a][lane] = c.min[a];
-            b[a + 3][lane] = c.max[a];
+        let mut kids: Vec<usize> = vec![n.a as usize, n.a as usize + 1];
+        while kids.len() < 4 {
+            let Some(pos) = (0..kids.len())
+                .filter(|&p| !n2[kids[p]].is_leaf())
+                .max_by(|&a, &b| area(kids[a]).total_cmp(&area(kids[b])))
+            else {
+                break;
+            };
+            let k = kids.swap_remove(pos);
+            kids.push(n2[k].a as usize);
+            kids.push(n2[k].a as usize + 1);
         }
-        let (r, s) = collapse(n2, k, out);
-        child[lane] = r;
-        stack_needed = stack_needed.max(s);
+        let idx = self.nodes.len();
+        let mut b = [[f32::INFINITY; 4], [f32::INFINITY; 4], [f32::INFINITY; 4], [f32::NEG_INFINITY; 4], [f32::NEG_INFINITY; 4], [f32::NEG_INFINITY; 4]];
+        for (lane, &k) in kids.iter().enumerate() {
+            for a in 0..3 {
+                b[a][lane] = n2[k].min[a];
+                b[a + 3][lane] = n2[k].max[a];
+            }
+        }
+        self.nodes.push(Node4 {
+            b: b.map(Vec4::from_array),
+            child: [0; 4],
+        });
+        let mut stack_needed = 0;
+        for (lane, &k) in kids.iter().enumerate() {
+            let (r, s) = self.collapse(k);
+            self.nodes[idx].child[lane] = r;
+            stack_needed = stack_needed.max(s);
+        }
+        (idx as u32, stack_needed + kids.len() - 1)
     }
-    out[idx].b = b.map(Vec4::from_array);
-    out[idx].child = child;
-    (idx as u32, stack_needed + kids.len() - 1)
 }
 
 #[cfg(test)]

@@ -98,7 +98,7 @@ fn random_ray(rng: &mut Rng) -> (Ray, f32) {
 
 fn check_against_brute(tris: &[[Vec3; 3]], rays: usize, seed: u64) -> (usize, usize) {
     let bvh = Bvh::build(tris);
-    check_structure(&bvh);
+    check_structure(&bvh, tris);
     let mut rng = Rng(seed);
     let mut hits = 0;
     let mut ties = 0;
@@ -137,13 +137,17 @@ fn check_against_brute(tris: &[[Vec3; 3]], rays: usize, seed: u64) -> (usize, us
 
 /// Node bounds contain their children/triangles, every non-degenerate
 /// triangle is referenced exactly once, and the stack bound holds.
-fn check_structure(bvh: &Bvh) {
-    if bvh.tris.is_empty() {
-        assert!(bvh.nodes.is_empty());
+fn check_structure(bvh: &Bvh, input: &[[Vec3; 3]]) {
+    let expected: Vec<u32> = (0..input.len() as u32)
+        .filter(|&i| !is_degenerate(&input[i as usize]))
+        .collect();
+    if expected.is_empty() {
+        assert!(bvh.nodes.is_empty() && bvh.tris.is_empty());
         return;
     }
     assert!(bvh.stack_needed <= LARGE_STACK);
-    let mut seen = vec![0u32; bvh.tris.len()];
+    assert_eq!(bvh.prim_ids.len(), 4 * bvh.tris.len());
+    let mut seen = vec![0u32; input.len()];
     let b = bvh.bounds();
     let mut stack = vec![(bvh.root, b.min, b.max)];
     let mut leaves = 0;
@@ -155,12 +159,20 @@ fn check_structure(bvh: &Bvh) {
     while let Some((r, min, max)) = stack.pop() {
         if r & LEAF != 0 {
             leaves += 1;
-            let range = leaf_range(r);
-            assert!(range.len() <= build::MAX_LEAF);
-            for k in range {
-                seen[k] += 1;
-                let t = bvh.tris[k];
-                for p in [t.v0, t.v0 + t.e1, t.v0 + t.e2] {
+            let (p, valid) = leaf_packet(r);
+            let t = &bvh.tris[p];
+            for lane in 0..4 {
+                let id = bvh.prim_ids[4 * p + lane];
+                if valid & (1 << lane) == 0 {
+                    assert_eq!(id, u32::MAX);
+                    continue;
+                }
+                seen[id as usize] += 1;
+                let get = |v: &[Vec4; 3]| Vec3::new(v[0][lane], v[1][lane], v[2][lane]);
+                let (v0, e1, e2) = (get(&t.v0), get(&t.e1), get(&t.e2));
+                let tri = Tri::new(&input[id as usize]);
+                assert_eq!((v0, e1, e2), (tri.v0, tri.e1, tri.e2));
+                for p in [v0, v0 + e1, v0 + e2] {
                     assert!(inside(p, min, max));
                 }
             }
@@ -181,7 +193,9 @@ fn check_structure(bvh: &Bvh) {
         }
     }
     assert_eq!(leaves + bvh.nodes.len(), bvh.node_count());
-    assert!(seen.iter().all(|&s| s == 1));
+    for (i, &s) in seen.iter().enumerate() {
+        assert_eq!(s, !is_degenerate(&input[i]) as u32, "triangle {i}");
+    }
 }
 
 #[test]
@@ -226,7 +240,7 @@ fn coincident_centroids_and_deep_distributions() {
     let t = [Vec3::ZERO, Vec3::X, Vec3::Y];
     let same = vec![t; 1000];
     let bvh = Bvh::build(&same);
-    check_structure(&bvh);
+    check_structure(&bvh, &same);
     let hit = bvh
         .intersect(&Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z), f32::INFINITY)
         .unwrap();
