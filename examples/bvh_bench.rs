@@ -63,7 +63,7 @@ fn sphere(tris: &mut Vec<[Vec3; 3]>, c: Vec3, radius: f32, nu: usize, nv: usize,
     }
 }
 
-fn make_mesh(target: usize) -> Vec<[Vec3; 3]> {
+pub fn make_mesh(target: usize) -> Vec<[Vec3; 3]> {
     let mut tris = Vec::with_capacity(target + 1024);
     let mut rng = Rng(7);
     // Ground: ~5% of the triangles, slightly wavy.
@@ -93,7 +93,7 @@ fn make_mesh(target: usize) -> Vec<[Vec3; 3]> {
 
 /// Cornell box: 5 walls + light quad? No: 5 walls, ceiling counted, two
 /// blocks (12 triangles each) = 36 triangles.
-fn cornell() -> Vec<[Vec3; 3]> {
+pub fn cornell() -> Vec<[Vec3; 3]> {
     let mut t = Vec::new();
     let quad = |t: &mut Vec<[Vec3; 3]>, a: Vec3, b: Vec3, c: Vec3, d: Vec3| {
         t.push([a, b, c]);
@@ -138,12 +138,12 @@ fn peak_rss_mib() -> f64 {
         .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
-struct Rays {
-    closest: Vec<Ray>,
-    shadow: Vec<Ray>,
+pub struct Rays {
+    pub closest: Vec<Ray>,
+    pub shadow: Vec<Ray>,
 }
 
-fn make_rays(b: &Bounds3, n: usize) -> Rays {
+pub fn make_rays(b: &Bounds3, n: usize) -> Rays {
     let mut rng = Rng(12345);
     let closest = (0..n).map(|_| Ray::new(rng.in_bounds(b), rng.dir())).collect();
     let shadow = (0..n)
@@ -158,18 +158,18 @@ fn make_rays(b: &Bounds3, n: usize) -> Rays {
 /// CPU time consumed so far by the calling thread, in ns (from
 /// /proc/thread-self/schedstat, so it excludes time spent waiting for a core
 /// on a shared machine).
-fn thread_cpu_ns() -> u64 {
+pub fn thread_cpu_ns() -> u64 {
     std::fs::read_to_string("/proc/thread-self/schedstat")
         .ok()
         .and_then(|s| s.split_whitespace().next()?.parse().ok())
         .unwrap_or(0)
 }
 
-struct Rate {
+pub struct Rate {
     /// Rays per second of wall time, all threads.
     wall: f64,
     /// Rays per second of thread CPU time (per core).
-    cpu: f64,
+    pub cpu: f64,
     hits: usize,
     sum_t: f64,
 }
@@ -187,7 +187,7 @@ impl std::fmt::Display for Rate {
 }
 
 /// Runs `f` over the rays on the pool, best of 3 passes.
-fn time_rays(pool: &rayon::ThreadPool, rays: &[Ray], f: impl Fn(&Ray) -> Option<f32> + Sync) -> Rate {
+pub fn time_rays(pool: &rayon::ThreadPool, rays: &[Ray], f: impl Fn(&Ray) -> Option<f32> + Sync) -> Rate {
     let mut best = Rate {
         wall: 0.0,
         cpu: 0.0,

@@ -323,8 +323,10 @@ impl<const N: usize> Stack<N> {
     }
 }
 
-/// Small stack used when the tree allows it; the large one always suffices
-/// (see `Bvh::build`).
+/// Traversal stack sizes: the smallest one the tree allows is used (zeroing
+/// the stack is a measurable part of a query on small scenes); the large one
+/// always suffices (see `Bvh::build`).
+const TINY_STACK: usize = 16;
 const SMALL_STACK: usize = 64;
 const LARGE_STACK: usize = 3 * 64;
 
@@ -383,9 +385,6 @@ impl Bvh {
         // the BVH2 depth is bounded by the builder, so this always holds.
         assert!(stack_needed <= LARGE_STACK);
         nodes.shrink_to_fit();
-        if std::env::var_os("BVH_DEBUG").is_some() {
-            eprintln!("nodes4 {} packets {} tris {} fill {:.2} stack {}", nodes.len(), packets.len(), refs.len(), refs.len() as f64 / packets.len() as f64, stack_needed);
-        }
         Bvh {
             nodes,
             root,
@@ -402,7 +401,9 @@ impl Bvh {
         if self.tris.is_empty() {
             return None;
         }
-        if self.stack_needed <= SMALL_STACK {
+        if self.stack_needed <= TINY_STACK {
+            self.intersect_impl::<TINY_STACK>(ray, t_max)
+        } else if self.stack_needed <= SMALL_STACK {
             self.intersect_impl::<SMALL_STACK>(ray, t_max)
         } else {
             self.intersect_impl::<LARGE_STACK>(ray, t_max)
@@ -414,7 +415,9 @@ impl Bvh {
         if self.tris.is_empty() {
             return false;
         }
-        if self.stack_needed <= SMALL_STACK {
+        if self.stack_needed <= TINY_STACK {
+            self.occluded_impl::<TINY_STACK>(ray, t_max)
+        } else if self.stack_needed <= SMALL_STACK {
             self.occluded_impl::<SMALL_STACK>(ray, t_max)
         } else {
             self.occluded_impl::<LARGE_STACK>(ray, t_max)
