@@ -15,7 +15,7 @@
 mod build;
 
 use crate::math::{Bounds3, Ray, Vec3};
-use glam::Vec4;
+use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
 /// Closest-hit record.
@@ -334,7 +334,7 @@ impl Bvh {
     /// Builds the BVH with binned SAH (parallel with rayon on large inputs),
     /// then collapses it into a 4-wide BVH.
     pub fn build(tris: &[[Vec3; 3]]) -> Bvh {
-        let mut refs: Vec<build::PrimRef> = tris
+        let (mut refs, mut ids): (Vec<build::PrimRef>, Vec<u32>) = tris
             .par_iter()
             .with_min_len(4096)
             .enumerate()
@@ -342,13 +342,14 @@ impl Bvh {
                 if Tri::new(t).is_degenerate() {
                     return None;
                 }
-                Some(build::PrimRef {
-                    min: t[0].min(t[1]).min(t[2]),
-                    idx: i as u32,
-                    max: t[0].max(t[1]).max(t[2]),
-                })
+                let [a, b, c] = t.map(Vec3A::from);
+                let r = build::PrimRef {
+                    min: a.min(b).min(c),
+                    max: a.max(b).max(c),
+                };
+                Some((r, i as u32))
             })
-            .collect();
+            .unzip();
         if refs.is_empty() {
             return Bvh {
                 nodes: Vec::new(),
@@ -361,14 +362,15 @@ impl Bvh {
             };
         }
         assert!(refs.len() < 1 << 29, "too many triangles for one BVH");
-        let nodes2 = build::build(&mut refs);
+        let nodes2 = build::build(&mut refs, &mut ids);
+        drop(refs);
         let bounds = Bounds3 {
             min: nodes2[0].min,
             max: nodes2[0].max,
         };
         let mut c = Collapse {
             n2: &nodes2,
-            refs: &refs,
+            ids: &ids,
             input: tris,
             nodes: Vec::with_capacity(nodes2.len() / 2 + 1),
             packets: Vec::with_capacity(nodes2.len() / 2 + 1),
@@ -565,8 +567,8 @@ impl Bvh {
 /// BVH2 → 4-wide BVH conversion state.
 struct Collapse<'a> {
     n2: &'a [Node],
-    /// Primitive references in BVH2 leaf order.
-    refs: &'a [build::PrimRef],
+    /// Input triangle indices in BVH2 leaf order.
+    ids: &'a [u32],
     input: &'a [[Vec3; 3]],
     nodes: Vec<Node4>,
     packets: Vec<Tri4>,
@@ -581,15 +583,15 @@ impl Collapse<'_> {
         let n2 = self.n2;
         let n = &n2[i];
         if n.is_leaf() {
-            let refs = &self.refs[n.a as usize..(n.a + n.count) as usize];
-            let tris: Vec<Tri> = refs
-                .iter()
-                .map(|r| Tri::new(&self.input[r.idx as usize]))
-                .collect();
+            let ids = &self.ids[n.a as usize..(n.a + n.count) as usize];
+            let mut tris = [Tri::new(&[Vec3::ZERO; 3]); 4];
+            for (t, &i) in tris.iter_mut().zip(ids) {
+                *t = Tri::new(&self.input[i as usize]);
+            }
             let p = self.packets.len() as u32;
-            self.packets.push(Tri4::new(&tris));
+            self.packets.push(Tri4::new(&tris[..ids.len()]));
             for lane in 0..4 {
-                self.prim_ids.push(refs.get(lane).map_or(u32::MAX, |r| r.idx));
+                self.prim_ids.push(ids.get(lane).copied().unwrap_or(u32::MAX));
             }
             return (leaf_ref(p, n.count), 0);
         }
@@ -602,18 +604,21 @@ impl Collapse<'_> {
             }
             .half_area()
         };
-        let mut kids: Vec<usize> = vec![n.a as usize, n.a as usize + 1];
-        while kids.len() < 4 {
-            let Some(pos) = (0..kids.len())
+        let mut kids = [n.a as usize, n.a as usize + 1, 0, 0];
+        let mut nk = 2;
+        while nk < 4 {
+            let Some(pos) = (0..nk)
                 .filter(|&p| !n2[kids[p]].is_leaf())
                 .max_by(|&a, &b| area(kids[a]).total_cmp(&area(kids[b])))
             else {
                 break;
             };
-            let k = kids.swap_remove(pos);
-            kids.push(n2[k].a as usize);
-            kids.push(n2[k].a as usize + 1);
+            let k = kids[pos];
+            kids[pos] = n2[k].a as usize;
+            kids[nk] = n2[k].a as usize + 1;
+            nk += 1;
         }
+        let kids = &kids[..nk];
         let idx = self.nodes.len();
         let mut b = [[f32::INFINITY; 4], [f32::INFINITY; 4], [f32::INFINITY; 4], [f32::NEG_INFINITY; 4], [f32::NEG_INFINITY; 4], [f32::NEG_INFINITY; 4]];
         for (lane, &k) in kids.iter().enumerate() {
