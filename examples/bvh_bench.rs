@@ -335,7 +335,9 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let target: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1_000_000);
     let nrays: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(2_000_000);
+    // NO_OBVHS=1 skips the comparison; SCENES=mesh or SCENES=cornell runs one.
     let skip_obvhs = std::env::var_os("NO_OBVHS").is_some();
+    let scenes = std::env::var("SCENES").unwrap_or_else(|_| "mesh,cornell".into());
     rayon::ThreadPoolBuilder::new()
         .num_threads(THREADS)
         .build_global()
@@ -345,37 +347,39 @@ fn main() {
         .build()
         .unwrap();
 
-    let tris = make_mesh(target);
-    let mut b = Bounds3::EMPTY;
-    for t in &tris {
-        for v in t {
-            b.grow(*v);
+    let bounds = |tris: &[[Vec3; 3]]| {
+        let mut b = Bounds3::EMPTY;
+        for t in tris {
+            for v in t {
+                b.grow(*v);
+            }
+        }
+        b
+    };
+    if scenes.contains("mesh") {
+        let tris = make_mesh(target);
+        let b = bounds(&tris);
+        println!(
+            "mesh: {} triangles, bounds {:?}..{:?}; {nrays} rays per query type, {THREADS} threads",
+            tris.len(),
+            b.min,
+            b.max
+        );
+        let rays = make_rays(&b, nrays);
+        println!("peak RSS after mesh + rays: {:.1} MiB", peak_rss_mib());
+        bench_kalos("mesh", &pool, &tris, &rays);
+        println!("peak RSS after kalos: {:.1} MiB", peak_rss_mib());
+        if !skip_obvhs {
+            bench_obvhs("mesh", &pool, &tris, &rays);
+            println!("peak RSS after obvhs: {:.1} MiB", peak_rss_mib());
         }
     }
-    println!(
-        "mesh: {} triangles, bounds {:?}..{:?}; {nrays} rays per query type, {THREADS} threads",
-        tris.len(),
-        b.min,
-        b.max
-    );
-    let rays = make_rays(&b, nrays);
-    println!("peak RSS after mesh + rays: {:.1} MiB", peak_rss_mib());
-    bench_kalos("mesh", &pool, &tris, &rays);
-    println!("peak RSS after kalos: {:.1} MiB", peak_rss_mib());
-
-    let cb = cornell();
-    let mut bb = Bounds3::EMPTY;
-    for t in &cb {
-        for v in t {
-            bb.grow(*v);
+    if scenes.contains("cornell") {
+        let tris = cornell();
+        let rays = make_rays(&bounds(&tris), nrays);
+        bench_kalos("cornell36", &pool, &tris, &rays);
+        if !skip_obvhs {
+            bench_obvhs("cornell36", &pool, &tris, &rays);
         }
-    }
-    let crays = make_rays(&bb, nrays);
-    bench_kalos("cornell36", &pool, &cb, &crays);
-
-    if !skip_obvhs {
-        bench_obvhs("mesh", &pool, &tris, &rays);
-        bench_obvhs("cornell36", &pool, &cb, &crays);
-        println!("peak RSS at end (incl. obvhs): {:.1} MiB", peak_rss_mib());
     }
 }

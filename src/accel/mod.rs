@@ -249,9 +249,6 @@ struct RayData {
     ix: Vec4,
     iy: Vec4,
     iz: Vec4,
-    /// Index in `Node4::b` of the near plane per axis (far = near ± 3).
-    near: [usize; 3],
-    far: [usize; 3],
 }
 
 impl RayData {
@@ -262,11 +259,6 @@ impl RayData {
         let inv = 1.0 / ray.d;
         let fix = |x: f32| if x.is_finite() { x } else { f32::MAX.copysign(x) };
         let inv = Vec3::new(fix(inv.x), fix(inv.y), fix(inv.z));
-        let near = [
-            if inv.x < 0.0 { 3 } else { 0 },
-            if inv.y < 0.0 { 4 } else { 1 },
-            if inv.z < 0.0 { 5 } else { 2 },
-        ];
         RayData {
             ox: Vec4::splat(ray.o.x),
             oy: Vec4::splat(ray.o.y),
@@ -277,8 +269,6 @@ impl RayData {
             ix: Vec4::splat(inv.x),
             iy: Vec4::splat(inv.y),
             iz: Vec4::splat(inv.z),
-            near,
-            far: near.map(|i| if i >= 3 { i - 3 } else { i + 3 }),
         }
     }
 
@@ -287,15 +277,17 @@ impl RayData {
     #[inline(always)]
     fn slab4(&self, n: &Node4, t_max: f32) -> (Vec4, u32) {
         let b = &n.b;
-        let tnx = (b[self.near[0]] - self.ox) * self.ix;
-        let tny = (b[self.near[1]] - self.oy) * self.iy;
-        let tnz = (b[self.near[2]] - self.oz) * self.iz;
-        let tfx = (b[self.far[0]] - self.ox) * self.ix;
-        let tfy = (b[self.far[1]] - self.oy) * self.iy;
-        let tfz = (b[self.far[2]] - self.oz) * self.iz;
-        let tn = tnx.max(tny).max(tnz.max(Vec4::ZERO));
-        let tf = tfx.min(tfy).min(tfz.min(Vec4::splat(t_max)));
-        (tn, tn.cmple(tf * ROBUST).bitmask())
+        let x0 = (b[0] - self.ox) * self.ix;
+        let y0 = (b[1] - self.oy) * self.iy;
+        let z0 = (b[2] - self.oz) * self.iz;
+        let x1 = (b[3] - self.ox) * self.ix;
+        let y1 = (b[4] - self.oy) * self.iy;
+        let z1 = (b[5] - self.oz) * self.iz;
+        let tn = x0.min(x1).max(y0.min(y1)).max(z0.min(z1).max(Vec4::ZERO));
+        // Clamping t_max to MAX makes unused lanes ([+inf, +inf] boxes, tn =
+        // +inf) fail the test below even for an infinite t_max.
+        let tf = x0.max(x1).min(y0.max(y1)).min(z0.max(z1).min(Vec4::splat(t_max.min(f32::MAX))));
+        (tn, (tn * (1.0 / ROBUST)).cmple(tf).bitmask())
     }
 }
 
@@ -620,7 +612,8 @@ impl Collapse<'_> {
         }
         let kids = &kids[..nk];
         let idx = self.nodes.len();
-        let mut b = [[f32::INFINITY; 4], [f32::INFINITY; 4], [f32::INFINITY; 4], [f32::NEG_INFINITY; 4], [f32::NEG_INFINITY; 4], [f32::NEG_INFINITY; 4]];
+        // Unused lanes get the box [+inf, +inf], which no ray overlaps.
+        let mut b = [[f32::INFINITY; 4]; 6];
         for (lane, &k) in kids.iter().enumerate() {
             for a in 0..3 {
                 b[a][lane] = n2[k].min[a];

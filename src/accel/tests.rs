@@ -182,7 +182,8 @@ fn check_structure(bvh: &Bvh, input: &[[Vec3; 3]]) {
             for lane in 0..4 {
                 let cmin = Vec3::new(n.b[0][lane], n.b[1][lane], n.b[2][lane]);
                 let cmax = Vec3::new(n.b[3][lane], n.b[4][lane], n.b[5][lane]);
-                if cmin.x > cmax.x {
+                if cmin.x == f32::INFINITY {
+                    assert_eq!((cmin, cmax), (Vec3::INFINITY, Vec3::INFINITY));
                     continue; // unused slot
                 }
                 used += 1;
