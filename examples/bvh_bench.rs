@@ -6,8 +6,14 @@
 //! tessellated ground plane (pole triangles of the UV spheres are degenerate).
 //! Closest-hit rays start uniformly inside the bounds with uniform directions;
 //! any-hit (shadow) rays are segments between two uniform points in the bounds.
-//! Queries run on 2 rayon threads. The same mesh and rays are run through the
-//! `obvhs` crate (CWBVH, medium build preset) for comparison.
+//! Queries run on 2 rayon threads. Throughput is reported per core from each
+//! thread's own CPU time (/proc/thread-self/schedstat), which is robust to
+//! other processes on a shared machine, and as wall-clock rays/s. The same
+//! scenes and rays are then run through the `obvhs` crate (CWBVH, fast and
+//! medium build presets) for comparison.
+//!
+//! Env: `NO_OBVHS=1` skips obvhs; `SCENES=mesh` / `SCENES=cornell` runs one
+//! scene (both by default).
 
 use kalos::accel::Bvh;
 use kalos::math::{Bounds3, Ray, Vec3};
@@ -51,7 +57,11 @@ fn sphere(tris: &mut Vec<[Vec3; 3]>, c: Vec3, radius: f32, nu: usize, nv: usize,
             + 0.15 * (5.0 * theta + seed).sin() * (7.0 * phi).sin()
             + 0.04 * (41.0 * theta).sin() * (37.0 * phi + seed).cos()
             + 0.01 * (171.0 * theta + 3.0 * phi).sin();
-        let dir = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+        let dir = Vec3::new(
+            theta.sin() * phi.cos(),
+            theta.cos(),
+            theta.sin() * phi.sin(),
+        );
         c + dir * radius * disp
     };
     for j in 0..nv {
@@ -63,7 +73,7 @@ fn sphere(tris: &mut Vec<[Vec3; 3]>, c: Vec3, radius: f32, nu: usize, nv: usize,
     }
 }
 
-pub fn make_mesh(target: usize) -> Vec<[Vec3; 3]> {
+fn make_mesh(target: usize) -> Vec<[Vec3; 3]> {
     let mut tris = Vec::with_capacity(target + 1024);
     let mut rng = Rng(7);
     // Ground: ~5% of the triangles, slightly wavy.
@@ -91,21 +101,58 @@ pub fn make_mesh(target: usize) -> Vec<[Vec3; 3]> {
     tris
 }
 
-/// Cornell box: 5 walls + light quad? No: 5 walls, ceiling counted, two
-/// blocks (12 triangles each) = 36 triangles.
-pub fn cornell() -> Vec<[Vec3; 3]> {
+/// Cornell box in the unit cube: floor, ceiling, three walls, a light quad just
+/// below the ceiling (12 triangles) and two rotated blocks (12 each): 36
+/// triangles.
+fn cornell() -> Vec<[Vec3; 3]> {
     let mut t = Vec::new();
     let quad = |t: &mut Vec<[Vec3; 3]>, a: Vec3, b: Vec3, c: Vec3, d: Vec3| {
         t.push([a, b, c]);
         t.push([a, c, d]);
     };
     let v = |x, y, z| Vec3::new(x, y, z);
-    quad(&mut t, v(0., 0., 0.), v(1., 0., 0.), v(1., 0., 1.), v(0., 0., 1.)); // floor
-    quad(&mut t, v(0., 1., 0.), v(0., 1., 1.), v(1., 1., 1.), v(1., 1., 0.)); // ceiling
-    quad(&mut t, v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)); // back
-    quad(&mut t, v(0., 0., 0.), v(0., 0., 1.), v(0., 1., 1.), v(0., 1., 0.)); // left
-    quad(&mut t, v(1., 0., 0.), v(1., 1., 0.), v(1., 1., 1.), v(1., 0., 1.)); // right
-    quad(&mut t, v(0.4, 0.999, 0.4), v(0.6, 0.999, 0.4), v(0.6, 0.999, 0.6), v(0.4, 0.999, 0.6)); // light
+    quad(
+        &mut t,
+        v(0., 0., 0.),
+        v(1., 0., 0.),
+        v(1., 0., 1.),
+        v(0., 0., 1.),
+    ); // floor
+    quad(
+        &mut t,
+        v(0., 1., 0.),
+        v(0., 1., 1.),
+        v(1., 1., 1.),
+        v(1., 1., 0.),
+    ); // ceiling
+    quad(
+        &mut t,
+        v(0., 0., 1.),
+        v(1., 0., 1.),
+        v(1., 1., 1.),
+        v(0., 1., 1.),
+    ); // back
+    quad(
+        &mut t,
+        v(0., 0., 0.),
+        v(0., 0., 1.),
+        v(0., 1., 1.),
+        v(0., 1., 0.),
+    ); // left
+    quad(
+        &mut t,
+        v(1., 0., 0.),
+        v(1., 1., 0.),
+        v(1., 1., 1.),
+        v(1., 0., 1.),
+    ); // right
+    quad(
+        &mut t,
+        v(0.4, 0.999, 0.4),
+        v(0.6, 0.999, 0.4),
+        v(0.6, 0.999, 0.6),
+        v(0.4, 0.999, 0.6),
+    ); // light
     let block = |t: &mut Vec<[Vec3; 3]>, c: Vec3, s: Vec3, ang: f32| {
         let (sa, ca) = ang.sin_cos();
         let p = |x: f32, y: f32, z: f32| {
@@ -138,14 +185,16 @@ fn peak_rss_mib() -> f64 {
         .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
-pub struct Rays {
-    pub closest: Vec<Ray>,
-    pub shadow: Vec<Ray>,
+struct Rays {
+    closest: Vec<Ray>,
+    shadow: Vec<Ray>,
 }
 
-pub fn make_rays(b: &Bounds3, n: usize) -> Rays {
+fn make_rays(b: &Bounds3, n: usize) -> Rays {
     let mut rng = Rng(12345);
-    let closest = (0..n).map(|_| Ray::new(rng.in_bounds(b), rng.dir())).collect();
+    let closest = (0..n)
+        .map(|_| Ray::new(rng.in_bounds(b), rng.dir()))
+        .collect();
     let shadow = (0..n)
         .map(|_| {
             let o = rng.in_bounds(b);
@@ -158,7 +207,7 @@ pub fn make_rays(b: &Bounds3, n: usize) -> Rays {
 /// CPU time consumed so far by the calling thread, in ns (from
 /// /proc/thread-self/schedstat, so it excludes time spent waiting for a core
 /// on a shared machine).
-pub fn thread_cpu_ns() -> u64 {
+fn thread_cpu_ns() -> u64 {
     std::fs::read_to_string("/proc/thread-self/schedstat")
         .ok()
         .and_then(|s| s.split_whitespace().next()?.parse().ok())
@@ -177,11 +226,11 @@ fn process_cpu_s() -> f64 {
     (ticks(11) + ticks(12)) / 100.0
 }
 
-pub struct Rate {
+struct Rate {
     /// Rays per second of wall time, all threads.
     wall: f64,
     /// Rays per second of thread CPU time (per core).
-    pub cpu: f64,
+    cpu: f64,
     hits: usize,
     sum_t: f64,
 }
@@ -199,7 +248,11 @@ impl std::fmt::Display for Rate {
 }
 
 /// Runs `f` over the rays on the pool, best of 3 passes.
-pub fn time_rays(pool: &rayon::ThreadPool, rays: &[Ray], f: impl Fn(&Ray) -> Option<f32> + Sync) -> Rate {
+fn time_rays(
+    pool: &rayon::ThreadPool,
+    rays: &[Ray],
+    f: impl Fn(&Ray) -> Option<f32> + Sync,
+) -> Rate {
     let mut best = Rate {
         wall: 0.0,
         cpu: 0.0,
@@ -257,7 +310,10 @@ fn bench_kalos(name: &str, pool: &rayon::ThreadPool, tris: &[[Vec3; 3]], rays: &
     let r = time_rays(pool, &rays.closest, |r| {
         bvh.intersect(r, f32::INFINITY).map(|h| h.t)
     });
-    println!("[kalos {name}] closest: {r}  (hits {}, sum t {:.6e})", r.hits, r.sum_t);
+    println!(
+        "[kalos {name}] closest: {r}  (hits {}, sum t {:.6e})",
+        r.hits, r.sum_t
+    );
     let r = time_rays(pool, &rays.shadow, |r| bvh.occluded(r, 1.0).then_some(0.0));
     println!("[kalos {name}] any-hit: {r}  (occluded {})", r.hits);
 }
@@ -327,14 +383,23 @@ fn bench_obvhs(name: &str, pool: &rayon::ThreadPool, tris: &[[Vec3; 3]], rays: &
             let ray = ORay::new(a(r.o), a(r.d), 0.0, 1.0);
             (!bvh.ray_traverse_miss(ray, |ray, id| rt[id].intersect(ray))).then_some(0.0)
         });
-        println!("[obvhs {name} {preset}] any-hit: {r}  (occluded {})", r.hits);
+        println!(
+            "[obvhs {name} {preset}] any-hit: {r}  (occluded {})",
+            r.hits
+        );
     }
 }
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let target: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1_000_000);
-    let nrays: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(2_000_000);
+    let target: usize = args
+        .get(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1_000_000);
+    let nrays: usize = args
+        .get(2)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2_000_000);
     // NO_OBVHS=1 skips the comparison; SCENES=mesh or SCENES=cornell runs one.
     let skip_obvhs = std::env::var_os("NO_OBVHS").is_some();
     let scenes = std::env::var("SCENES").unwrap_or_else(|_| "mesh,cornell".into());

@@ -162,7 +162,9 @@ impl Task<'_> {
             return leaf;
         }
         let cb = &self.info.cb;
-        let degenerate = !((cb.max - cb.min).max_element() > 0.0);
+        // (A NaN extent counts as degenerate too.)
+        let ext = (cb.max - cb.min).max_element();
+        let degenerate = ext.is_nan() || ext <= 0.0;
 
         let mut split = None;
         if !degenerate && self.depth < SAH_DEPTH {
@@ -192,7 +194,11 @@ impl Task<'_> {
                 };
                 let nl = n / 2;
                 median_split(self.refs, self.ids, nl, axis);
-                (nl, range_info(&self.refs[..nl]), range_info(&self.refs[nl..]))
+                (
+                    nl,
+                    range_info(&self.refs[..nl]),
+                    range_info(&self.refs[nl..]),
+                )
             }
         };
 
@@ -272,7 +278,7 @@ fn find_split(refs: &[PrimRef], cb: &Box3, node_area: f32) -> Option<Split> {
     let total = refs.len() as u32;
     let mut best: Option<(usize, usize, f32)> = None;
     for (axis, bins) in bins.iter().enumerate() {
-        if !(ext[axis] > 0.0) {
+        if ext[axis].is_nan() || ext[axis] <= 0.0 {
             continue;
         }
         // Right-to-left sweep: cost contribution of the right part.

@@ -1,6 +1,15 @@
-//! Ray–triangle acceleration structure: a binned-SAH BVH2 over a triangle
-//! soup, flattened into 32-byte nodes, with triangles stored in leaf order as
-//! precomputed Möller–Trumbore edges.
+//! Ray–triangle acceleration structure.
+//!
+//! Build: binned SAH (16 bins, all three axes, costs counted in 4-triangle
+//! blocks) into a flattened BVH2 of 32-byte nodes, subtrees built in parallel
+//! with rayon; the BVH2 is then collapsed into a 4-wide BVH (`Node4`, 128
+//! bytes: SoA child boxes + child references) whose leaves are single packets
+//! of up to four triangles in SoA Möller–Trumbore form (`Tri4`, v0/e1/e2).
+//!
+//! Traversal: one ray at a time, 4 boxes per SIMD slab test and 4 triangles
+//! per SIMD triangle test (glam `Vec4`: SSE2 on x86-64, NEON on aarch64), no
+//! heap allocation, a fixed-size stack sized from the tree at build time, and
+//! children visited nearest-first for closest-hit queries.
 //!
 //! Queries are double-sided and report hits with `t` strictly inside
 //! `(0, t_max)`, in units of the (not necessarily normalised) ray direction.
@@ -31,8 +40,9 @@ pub struct Hit {
     pub b2: f32,
 }
 
-/// Flattened BVH node (32 bytes). Interior nodes (`count == 0`) have their
-/// children at `a` and `a + 1`; leaves hold triangles `a .. a + count`.
+/// Flattened BVH2 node (32 bytes), the builder's output. Interior nodes
+/// (`count == 0`) have their children at `a` and `a + 1`; leaves hold
+/// primitives `a .. a + count` of the builder's leaf order.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C)]
 struct Node {
@@ -107,7 +117,7 @@ impl Tri {
         let inv = 1.0 / det;
         let s = o - self.v0;
         let u = s.dot(p) * inv;
-        if !(u >= 0.0 && u <= 1.0) {
+        if !(0.0..=1.0).contains(&u) {
             return None;
         }
         let q = s.cross(self.e1);
@@ -257,7 +267,13 @@ impl RayData {
         // Zero components give ±inf; replace them with ±MAX so that
         // `0 * inv` is 0 (never NaN).
         let inv = 1.0 / ray.d;
-        let fix = |x: f32| if x.is_finite() { x } else { f32::MAX.copysign(x) };
+        let fix = |x: f32| {
+            if x.is_finite() {
+                x
+            } else {
+                f32::MAX.copysign(x)
+            }
+        };
         let inv = Vec3::new(fix(inv.x), fix(inv.y), fix(inv.z));
         RayData {
             ox: Vec4::splat(ray.o.x),
@@ -286,7 +302,10 @@ impl RayData {
         let tn = x0.min(x1).max(y0.min(y1)).max(z0.min(z1).max(Vec4::ZERO));
         // Clamping t_max to MAX makes unused lanes ([+inf, +inf] boxes, tn =
         // +inf) fail the test below even for an infinite t_max.
-        let tf = x0.max(x1).min(y0.max(y1)).min(z0.max(z1).min(Vec4::splat(t_max.min(f32::MAX))));
+        let tf = x0
+            .max(x1)
+            .min(y0.max(y1))
+            .min(z0.max(z1).min(Vec4::splat(t_max.min(f32::MAX))));
         (tn, (tn * (1.0 / ROBUST)).cmple(tf).bitmask())
     }
 }
@@ -315,9 +334,9 @@ impl<const N: usize> Stack<N> {
     }
 }
 
-/// Traversal stack sizes: the smallest one the tree allows is used (zeroing
-/// the stack is a measurable part of a query on small scenes); the large one
-/// always suffices (see `Bvh::build`).
+/// Traversal stack sizes: the smallest one the tree allows is used (the stack
+/// is zeroed per query, 8 bytes per entry); the large one always suffices
+/// (see `Bvh::build`).
 const TINY_STACK: usize = 16;
 const SMALL_STACK: usize = 64;
 const LARGE_STACK: usize = 3 * 64;
@@ -473,7 +492,11 @@ impl Bvh {
                         }
                     }
                     t_best = t[lane];
-                    best = ((4 * p + lane) as u32, u.to_array()[lane], v.to_array()[lane]);
+                    best = (
+                        (4 * p + lane) as u32,
+                        u.to_array()[lane],
+                        v.to_array()[lane],
+                    );
                 }
             }
             // Pop the next node that may still hold a closer hit.
@@ -583,7 +606,8 @@ impl Collapse<'_> {
             let p = self.packets.len() as u32;
             self.packets.push(Tri4::new(&tris[..ids.len()]));
             for lane in 0..4 {
-                self.prim_ids.push(ids.get(lane).copied().unwrap_or(u32::MAX));
+                self.prim_ids
+                    .push(ids.get(lane).copied().unwrap_or(u32::MAX));
             }
             return (leaf_ref(p, n.count), 0);
         }

@@ -215,7 +215,10 @@ fn matches_brute_force_random_soups() {
         let (hits, _) = check_against_brute(&tris, 3000, seed * 7);
         total_hits += hits;
     }
-    assert!(total_hits > 3000, "too few hits to be meaningful: {total_hits}");
+    assert!(
+        total_hits > 3000,
+        "too few hits to be meaningful: {total_hits}"
+    );
 }
 
 #[test]
@@ -252,7 +255,11 @@ fn coincident_centroids_and_deep_distributions() {
         .map(|i| {
             let x = 1.001f32.powi(i * 4) - 1.0;
             let s = 1e-3 * (1.0 + x);
-            [Vec3::new(x, 0.0, 0.0), Vec3::new(x + s, 0.0, 0.0), Vec3::new(x, s, 0.0)]
+            [
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + s, 0.0, 0.0),
+                Vec3::new(x, s, 0.0),
+            ]
         })
         .collect();
     check_against_brute(&deep, 1000, 7);
@@ -271,7 +278,8 @@ fn coincident_centroids_and_deep_distributions() {
         let c = (v0 + v1 + v2) / 3.0;
         let r = Ray::new(c + Vec3::Z, -Vec3::Z);
         let h = bvh.intersect(&r, f32::INFINITY);
-        let h = h.unwrap_or_else(|| panic!("{i} {:?} {:?}", deep[i], brute(&deep, &r, f32::INFINITY)));
+        let h =
+            h.unwrap_or_else(|| panic!("{i} {:?} {:?}", deep[i], brute(&deep, &r, f32::INFINITY)));
         assert_eq!(h.prim, i as u32);
     }
 }
@@ -286,7 +294,9 @@ fn empty_input() {
     assert_eq!(bvh.node_count(), 0);
     // Only degenerate triangles: also empty.
     let bvh = Bvh::build(&[[Vec3::ZERO, Vec3::X, Vec3::X * 2.0], [Vec3::ONE; 3]]);
-    assert!(bvh.intersect(&Ray::new(-Vec3::X, Vec3::X), f32::INFINITY).is_none());
+    assert!(bvh
+        .intersect(&Ray::new(-Vec3::X, Vec3::X), f32::INFINITY)
+        .is_none());
     assert!(!bvh.occluded(&Ray::new(-Vec3::X, Vec3::X), f32::INFINITY));
 }
 
@@ -329,7 +339,13 @@ fn single_triangle_edge_cases() {
     // direction component whose origin lies exactly in a face plane of a node's
     // box may miss edges/vertices on that face; see the module docs.)
     let d = Vec3::new(0.125, 0.25, -1.0);
-    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.5, 0.5, 0.0), Vec3::new(0.5, 0.0, 0.0)] {
+    for p in [
+        Vec3::ZERO,
+        Vec3::X,
+        Vec3::Y,
+        Vec3::new(0.5, 0.5, 0.0),
+        Vec3::new(0.5, 0.0, 0.0),
+    ] {
         let r = Ray::new(p - d, d);
         let t = bvh.intersect(&r, f32::INFINITY).map(|h| h.t);
         assert!((t.unwrap() - 1.0).abs() < 1e-6, "{p}");
