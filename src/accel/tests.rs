@@ -1,0 +1,366 @@
+use super::*;
+
+/// Small deterministic RNG (PCG32) for the tests.
+struct Rng(u64);
+impl Rng {
+    fn next_u32(&mut self) -> u32 {
+        let old = self.0;
+        self.0 = old
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let x = (((old >> 18) ^ old) >> 27) as u32;
+        x.rotate_right((old >> 59) as u32)
+    }
+    fn f(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+    fn range(&mut self, a: f32, b: f32) -> f32 {
+        a + (b - a) * self.f()
+    }
+    fn v(&mut self, a: f32, b: f32) -> Vec3 {
+        Vec3::new(self.range(a, b), self.range(a, b), self.range(a, b))
+    }
+}
+
+fn brute(tris: &[[Vec3; 3]], ray: &Ray, t_max: f32) -> Option<Hit> {
+    let mut best: Option<Hit> = None;
+    for (i, t) in tris.iter().enumerate() {
+        let tri = Tri::new(t);
+        if tri.is_degenerate() {
+            continue;
+        }
+        let lim = best.map_or(t_max, |h| h.t);
+        if let Some((t, b1, b2)) = tri.intersect(ray.o, ray.d, lim) {
+            best = Some(Hit {
+                t,
+                prim: i as u32,
+                b1,
+                b2,
+            });
+        }
+    }
+    best
+}
+
+fn is_degenerate(t: &[Vec3; 3]) -> bool {
+    Tri::new(t).is_degenerate()
+}
+
+/// Triangle soup: small and large triangles, axis-aligned ones, exact
+/// duplicates, and (if `degenerate`) every kind of degenerate triangle.
+fn soup(rng: &mut Rng, n: usize, degenerate: bool) -> Vec<[Vec3; 3]> {
+    let mut tris = Vec::with_capacity(n);
+    while tris.len() < n {
+        let c = rng.v(-1.0, 1.0);
+        let s = if rng.f() < 0.1 { 0.8 } else { 0.08 };
+        let mut t = [c + rng.v(-s, s), c + rng.v(-s, s), c + rng.v(-s, s)];
+        match rng.next_u32() % 16 {
+            0 => {
+                // Axis-aligned (flat bounding box).
+                let z = t[0].z;
+                t[1].z = z;
+                t[2].z = z;
+            }
+            1 if !tris.is_empty() => {
+                // Exact duplicate of an earlier triangle.
+                t = tris[rng.next_u32() as usize % tris.len()];
+            }
+            2 if degenerate => t[1] = t[0],
+            3 if degenerate => t[2] = t[0] + (t[1] - t[0]) * 2.0,
+            4 if degenerate => t = [c, c, c],
+            5 if degenerate => t[rng.next_u32() as usize % 3].y = f32::NAN,
+            6 if degenerate => t[rng.next_u32() as usize % 3].x = f32::INFINITY,
+            _ => {}
+        }
+        tris.push(t);
+    }
+    tris
+}
+
+fn random_ray(rng: &mut Rng) -> (Ray, f32) {
+    let o = rng.v(-1.3, 1.3);
+    let mut d = rng.v(-1.0, 1.0) * rng.range(0.1, 10.0);
+    match rng.next_u32() % 8 {
+        0 => d.x = 0.0,
+        1 => {
+            d.y = 0.0;
+            d.z = -0.0;
+        }
+        _ => {}
+    }
+    let t_max = if rng.f() < 0.5 {
+        f32::INFINITY
+    } else {
+        rng.range(0.0, 2.0)
+    };
+    (Ray::new(o, d), t_max)
+}
+
+fn check_against_brute(tris: &[[Vec3; 3]], rays: usize, seed: u64) -> (usize, usize) {
+    let bvh = Bvh::build(tris);
+    check_structure(&bvh, tris);
+    let mut rng = Rng(seed);
+    let mut hits = 0;
+    let mut ties = 0;
+    for _ in 0..rays {
+        let (ray, t_max) = random_ray(&mut rng);
+        let want = brute(tris, &ray, t_max);
+        let got = bvh.intersect(&ray, t_max);
+        assert_eq!(bvh.occluded(&ray, t_max), want.is_some(), "{ray:?} {t_max}");
+        match (want, got) {
+            (None, None) => {}
+            (Some(w), Some(g)) => {
+                hits += 1;
+                assert!(!is_degenerate(&tris[g.prim as usize]));
+                assert!(g.t > 0.0 && g.t < t_max);
+                assert!(
+                    (w.t - g.t).abs() <= 1e-5 * w.t,
+                    "t mismatch {w:?} {g:?} {ray:?}"
+                );
+                if w.prim != g.prim {
+                    assert_eq!(w.t, g.t, "different prim and t: {w:?} {g:?}");
+                    ties += 1;
+                } else {
+                    assert_eq!((w.b1, w.b2), (g.b1, g.b2));
+                }
+                // Barycentrics reproduce the hit point.
+                let [v0, v1, v2] = tris[g.prim as usize];
+                let p = v0 + (v1 - v0) * g.b1 + (v2 - v0) * g.b2;
+                let q = ray.at(g.t);
+                assert!((p - q).length() < 1e-4 * (1.0 + q.length()), "{p} {q}");
+            }
+            _ => panic!("mismatch: brute {want:?} bvh {got:?} for {ray:?} t_max {t_max}"),
+        }
+    }
+    (hits, ties)
+}
+
+/// Node bounds contain their children/triangles, every non-degenerate
+/// triangle is referenced exactly once, and the stack bound holds.
+fn check_structure(bvh: &Bvh, input: &[[Vec3; 3]]) {
+    let expected: Vec<u32> = (0..input.len() as u32)
+        .filter(|&i| !is_degenerate(&input[i as usize]))
+        .collect();
+    if expected.is_empty() {
+        assert!(bvh.nodes.is_empty() && bvh.tris.is_empty());
+        return;
+    }
+    assert!(bvh.stack_needed <= LARGE_STACK);
+    assert_eq!(bvh.prim_ids.len(), 4 * bvh.tris.len());
+    let mut seen = vec![0u32; input.len()];
+    let b = bvh.bounds();
+    let mut stack = vec![(bvh.root, b.min, b.max)];
+    let mut leaves = 0;
+    let inside = |p: Vec3, min: Vec3, max: Vec3| {
+        // (v0 + e1 may round differently from v1.)
+        let tol = (p.abs() + 1.0) * 1e-6;
+        min.cmple(p + tol).all() && max.cmpge(p - tol).all()
+    };
+    while let Some((r, min, max)) = stack.pop() {
+        if r & LEAF != 0 {
+            leaves += 1;
+            let (p, valid) = leaf_packet(r);
+            let t = &bvh.tris[p];
+            for lane in 0..4 {
+                let id = bvh.prim_ids[4 * p + lane];
+                if valid & (1 << lane) == 0 {
+                    assert_eq!(id, u32::MAX);
+                    continue;
+                }
+                seen[id as usize] += 1;
+                let get = |v: &[Vec4; 3]| Vec3::new(v[0][lane], v[1][lane], v[2][lane]);
+                let (v0, e1, e2) = (get(&t.v0), get(&t.e1), get(&t.e2));
+                let tri = Tri::new(&input[id as usize]);
+                assert_eq!((v0, e1, e2), (tri.v0, tri.e1, tri.e2));
+                for p in [v0, v0 + e1, v0 + e2] {
+                    assert!(inside(p, min, max));
+                }
+            }
+        } else {
+            let n = &bvh.nodes[r as usize];
+            let mut used = 0;
+            for lane in 0..4 {
+                let cmin = Vec3::new(n.b[0][lane], n.b[1][lane], n.b[2][lane]);
+                let cmax = Vec3::new(n.b[3][lane], n.b[4][lane], n.b[5][lane]);
+                if cmin.x == f32::INFINITY {
+                    assert_eq!((cmin, cmax), (Vec3::INFINITY, Vec3::INFINITY));
+                    continue; // unused slot
+                }
+                used += 1;
+                assert!(min.cmple(cmin).all() && max.cmpge(cmax).all());
+                stack.push((n.child[lane], cmin, cmax));
+            }
+            assert!(used >= 2);
+        }
+    }
+    assert_eq!(leaves + bvh.nodes.len(), bvh.node_count());
+    for (i, &s) in seen.iter().enumerate() {
+        assert_eq!(s, !is_degenerate(&input[i]) as u32, "triangle {i}");
+    }
+}
+
+#[test]
+fn matches_brute_force_small_soup() {
+    let mut rng = Rng(1);
+    let tris = soup(&mut rng, 60, false);
+    check_against_brute(&tris, 4000, 11);
+}
+
+#[test]
+fn matches_brute_force_random_soups() {
+    let mut total_hits = 0;
+    for (seed, n) in [(2u64, 3000usize), (3, 1500), (4, 700)] {
+        let mut rng = Rng(seed);
+        let tris = soup(&mut rng, n, false);
+        let (hits, _) = check_against_brute(&tris, 3000, seed * 7);
+        total_hits += hits;
+    }
+    assert!(
+        total_hits > 3000,
+        "too few hits to be meaningful: {total_hits}"
+    );
+}
+
+#[test]
+fn matches_brute_force_with_degenerates() {
+    let mut rng = Rng(5);
+    let tris = soup(&mut rng, 2500, true);
+    assert!(tris.iter().filter(|t| is_degenerate(t)).count() > 500);
+    let (hits, _) = check_against_brute(&tris, 4000, 55);
+    assert!(hits > 1000);
+}
+
+#[test]
+fn matches_brute_force_large_parallel_build() {
+    // Large enough that the builder takes its parallel path.
+    let mut rng = Rng(6);
+    let tris = soup(&mut rng, 40_000, true);
+    check_against_brute(&tris, 500, 66);
+}
+
+#[test]
+fn coincident_centroids_and_deep_distributions() {
+    // Many identical triangles: no SAH split exists, median splits are used.
+    let t = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let same = vec![t; 1000];
+    let bvh = Bvh::build(&same);
+    check_structure(&bvh, &same);
+    let hit = bvh
+        .intersect(&Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z), f32::INFINITY)
+        .unwrap();
+    assert_eq!(hit.t, 1.0);
+    // Geometrically spaced triangles: the SAH would peel one off at a time;
+    // the depth limit must keep the tree shallow enough for the stack.
+    let deep: Vec<[Vec3; 3]> = (0..3000)
+        .map(|i| {
+            let x = 1.001f32.powi(i * 4) - 1.0;
+            let s = 1e-3 * (1.0 + x);
+            [
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + s, 0.0, 0.0),
+                Vec3::new(x, s, 0.0),
+            ]
+        })
+        .collect();
+    check_against_brute(&deep, 1000, 7);
+    // Nested triangles of geometrically growing size.
+    let nested: Vec<[Vec3; 3]> = (0..3000)
+        .map(|i| {
+            let s = 1.003f32.powi(i);
+            let z = Vec3::Z * (i as f32 * 1e-3);
+            [z, Vec3::X * s + z, Vec3::Y * s + z]
+        })
+        .collect();
+    check_against_brute(&nested, 1000, 8);
+    let bvh = Bvh::build(&deep);
+    for i in (0..3000).step_by(37) {
+        let [v0, v1, v2] = deep[i];
+        let c = (v0 + v1 + v2) / 3.0;
+        let r = Ray::new(c + Vec3::Z, -Vec3::Z);
+        let h = bvh.intersect(&r, f32::INFINITY);
+        let h =
+            h.unwrap_or_else(|| panic!("{i} {:?} {:?}", deep[i], brute(&deep, &r, f32::INFINITY)));
+        assert_eq!(h.prim, i as u32);
+    }
+}
+
+#[test]
+fn empty_input() {
+    let bvh = Bvh::build(&[]);
+    let ray = Ray::new(Vec3::ZERO, Vec3::X);
+    assert!(bvh.intersect(&ray, f32::INFINITY).is_none());
+    assert!(!bvh.occluded(&ray, f32::INFINITY));
+    assert!(bvh.bounds().is_empty());
+    assert_eq!(bvh.node_count(), 0);
+    // Only degenerate triangles: also empty.
+    let bvh = Bvh::build(&[[Vec3::ZERO, Vec3::X, Vec3::X * 2.0], [Vec3::ONE; 3]]);
+    assert!(bvh
+        .intersect(&Ray::new(-Vec3::X, Vec3::X), f32::INFINITY)
+        .is_none());
+    assert!(!bvh.occluded(&Ray::new(-Vec3::X, Vec3::X), f32::INFINITY));
+}
+
+#[test]
+fn single_triangle_edge_cases() {
+    let tri = [[Vec3::ZERO, Vec3::X, Vec3::Y]];
+    let bvh = Bvh::build(&tri);
+    assert_eq!(bvh.node_count(), 1);
+    assert_eq!(bvh.nodes.len(), 0);
+    assert_eq!(bvh.bounds().min, Vec3::ZERO);
+    assert_eq!(bvh.bounds().max, Vec3::new(1.0, 1.0, 0.0));
+    let down = Ray::new(Vec3::new(0.25, 0.5, 1.0), Vec3::new(0.0, 0.0, -1.0));
+    let h = bvh.intersect(&down, f32::INFINITY).unwrap();
+    assert_eq!((h.t, h.prim, h.b1, h.b2), (1.0, 0, 0.25, 0.5));
+    // Hit exactly at t_max is not reported; just beyond it is.
+    assert!(bvh.intersect(&down, 1.0).is_none());
+    assert!(!bvh.occluded(&down, 1.0));
+    assert!(bvh.intersect(&down, 1.000001).is_some());
+    assert!(bvh.occluded(&down, 1.000001));
+    // Back side (double-sided), and non-normalised direction: t in units of d.
+    let up = Ray::new(Vec3::new(0.25, 0.5, -2.0), Vec3::new(0.0, 0.0, 4.0));
+    assert_eq!(bvh.intersect(&up, f32::INFINITY).unwrap().t, 0.5);
+    // Triangle behind the origin.
+    let away = Ray::new(Vec3::new(0.25, 0.5, 1.0), Vec3::Z);
+    assert!(bvh.intersect(&away, f32::INFINITY).is_none());
+    assert!(!bvh.occluded(&away, f32::INFINITY));
+    // Origin on the triangle: t = 0 is excluded.
+    let on = Ray::new(Vec3::new(0.25, 0.25, 0.0), Vec3::Z);
+    assert!(bvh.intersect(&on, f32::INFINITY).is_none());
+    // Ray in the triangle's plane (parallel), through its interior.
+    for d in [Vec3::X, Vec3::new(1.0, 1.0, 0.0), -Vec3::Y] {
+        let par = Ray::new(Vec3::new(0.2, 0.2, 0.0) - d, d);
+        assert!(bvh.intersect(&par, f32::INFINITY).is_none());
+        assert!(!bvh.occluded(&par, f32::INFINITY));
+    }
+    // Parallel and just above the plane.
+    let above = Ray::new(Vec3::new(-1.0, 0.2, 1e-3), Vec3::X);
+    assert!(bvh.intersect(&above, f32::INFINITY).is_none());
+    // Vertices and edges are inside (closed triangle). (Rays with a zero
+    // direction component whose origin lies exactly in a face plane of a node's
+    // box may miss edges/vertices on that face; see the module docs.)
+    let d = Vec3::new(0.125, 0.25, -1.0);
+    for p in [
+        Vec3::ZERO,
+        Vec3::X,
+        Vec3::Y,
+        Vec3::new(0.5, 0.5, 0.0),
+        Vec3::new(0.5, 0.0, 0.0),
+    ] {
+        let r = Ray::new(p - d, d);
+        let t = bvh.intersect(&r, f32::INFINITY).map(|h| h.t);
+        assert!((t.unwrap() - 1.0).abs() < 1e-6, "{p}");
+    }
+    // Just outside an edge.
+    let r = Ray::new(Vec3::new(0.5, -1e-6, 1.0), -Vec3::Z);
+    assert!(bvh.intersect(&r, f32::INFINITY).is_none());
+    // Zero direction: never a hit.
+    let r = Ray::new(Vec3::new(0.2, 0.2, 0.0), Vec3::ZERO);
+    assert!(bvh.intersect(&r, f32::INFINITY).is_none());
+}
+
+#[test]
+fn is_send_sync() {
+    fn assert_send_sync<T: Send + Sync>() {}
+    assert_send_sync::<Bvh>();
+    assert_send_sync::<Hit>();
+}
