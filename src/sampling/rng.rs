@@ -65,6 +65,8 @@ const SOBOL_DIMS: u32 = sobol_burley::NUM_DIMENSIONS;
 pub struct SampleStream {
     kind: SamplerKind,
     key: u64,
+    /// mix64(key, index): the per-sample base of the hash (random mode).
+    base: u64,
     index: u32,
     dim: u32,
 }
@@ -81,6 +83,7 @@ impl SampleStream {
         SampleStream {
             kind: cfg.kind,
             key,
+            base: mix64(key ^ (sample_index as u64).wrapping_mul(0xd1b5_4a32_d192_ed03)),
             index: sample_index,
             dim: 0,
         }
@@ -106,8 +109,9 @@ impl SampleStream {
                 sobol_burley::sample(self.index, d, self.key as u32).min(ONE_MINUS_EPS)
             }
             _ => {
-                let h = mix64(self.key ^ mix64(((self.index as u64) << 32) | d as u64));
-                to_unit(h as u32)
+                // one finaliser per number: the base already mixes seed, stream, pixel, index
+                let h = mix64(self.base.wrapping_add((d as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15)));
+                to_unit((h >> 32) as u32)
             }
         }
     }
