@@ -224,31 +224,20 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
 
     let repeats = ex.repeats.unwrap_or(1).max(1);
     let mut rows: Vec<ResultRow> = Vec::new();
-    let mut last_images: Vec<(String, RgbImage)> = Vec::new();
-    for c in &ex.configs {
-        let mut last = None;
-        for &b in &budgets {
+    // Budgets outer, configurations inner: runs of one budget see the same machine load.
+    let mut last: Vec<Option<RgbImage>> = vec![None; ex.configs.len()];
+    for &b in &budgets {
+        for (ci, c) in ex.configs.iter().enumerate() {
             for rep in 0..repeats {
                 let mut o = common.clone();
                 o.extend(words(&c.options));
-                let bs = if kind == "seconds" {
-                    b.to_string()
-                } else {
-                    (b as u32).to_string()
-                };
+                let bs = if kind == "seconds" { b.to_string() } else { (b as u32).to_string() };
                 let seed = rep.to_string();
-                o.extend([
-                    if kind == "seconds" { "--time" } else { "--spp" },
-                    bs.as_str(),
-                    "--seed",
-                    seed.as_str(),
-                    "-q",
-                ]);
+                o.extend([if kind == "seconds" { "--time" } else { "--spp" }, bs.as_str(), "--seed", seed.as_str(), "-q"]);
                 let args = parse_render(&scene_spec, &o, &format!("{fname}: config {}", c.name))?;
                 let r = execute(&args, &scene)?;
-                let m = Metrics::compute(&r.image, &reference).map_err(|e| {
-                    format!("{fname}: config {}: against the reference: {e}", c.name)
-                })?;
+                let m = Metrics::compute(&r.image, &reference)
+                    .map_err(|e| format!("{fname}: config {}: against the reference: {e}", c.name))?;
                 let row = ResultRow {
                     config: c.name.clone(),
                     budget: b,
@@ -275,14 +264,17 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
                 if rep == 0 {
                     let img_path = out.join(format!("{}-{}.exr", safe_name(&c.name), bs));
                     write_image(&img_path, &r.image, 0.0, &[])?;
-                    last = Some(r.image);
+                    last[ci] = Some(r.image);
                 }
             }
         }
-        if let Some(img) = last {
-            last_images.push((c.name.clone(), img));
-        }
     }
+    let last_images: Vec<(String, RgbImage)> = ex
+        .configs
+        .iter()
+        .zip(last)
+        .filter_map(|(c, img)| img.map(|i| (c.name.clone(), i)))
+        .collect();
 
     // Tables.
     let mut csv = String::from(
