@@ -231,13 +231,24 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
             for rep in 0..repeats {
                 let mut o = common.clone();
                 o.extend(words(&c.options));
-                let bs = if kind == "seconds" { b.to_string() } else { (b as u32).to_string() };
+                let bs = if kind == "seconds" {
+                    b.to_string()
+                } else {
+                    (b as u32).to_string()
+                };
                 let seed = rep.to_string();
-                o.extend([if kind == "seconds" { "--time" } else { "--spp" }, bs.as_str(), "--seed", seed.as_str(), "-q"]);
+                o.extend([
+                    if kind == "seconds" { "--time" } else { "--spp" },
+                    bs.as_str(),
+                    "--seed",
+                    seed.as_str(),
+                    "-q",
+                ]);
                 let args = parse_render(&scene_spec, &o, &format!("{fname}: config {}", c.name))?;
                 let r = execute(&args, &scene)?;
-                let m = Metrics::compute(&r.image, &reference)
-                    .map_err(|e| format!("{fname}: config {}: against the reference: {e}", c.name))?;
+                let m = Metrics::compute(&r.image, &reference).map_err(|e| {
+                    format!("{fname}: config {}: against the reference: {e}", c.name)
+                })?;
                 let row = ResultRow {
                     config: c.name.clone(),
                     budget: b,

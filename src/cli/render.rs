@@ -94,6 +94,14 @@ pub struct RenderArgs {
     /// DTF: sample categories for N, comma-separated, increasing.
     #[arg(long, value_delimiter = ',')]
     pub dtf_categories: Option<Vec<u32>>,
+    /// DTF: floors of sigma and ||C_d|| for the allocation, as shares of their image means
+    /// (0 = the paper's raw formula, which can starve pixels whose dependent samples agreed).
+    #[arg(long, default_value_t = 0.05)]
+    pub dtf_floor: f32,
+    /// DTF budget mode: clip the allocation weights sigma^2/||C_d|| at this multiple of their
+    /// median (0 = no clipping).
+    #[arg(long, default_value_t = 16.0)]
+    pub dtf_max_ratio: f32,
     /// DTF: write the intermediate images beside the output (dependent, independent,
     /// filtered, combined, N and M maps).
     #[arg(long)]
@@ -121,6 +129,9 @@ impl RenderArgs {
             } else {
                 Clamp::ActiveSet
             },
+            sigma_floor: self.dtf_floor,
+            norm_floor: self.dtf_floor,
+            max_weight_ratio: self.dtf_max_ratio,
         }
     }
 }

@@ -123,6 +123,14 @@ pub struct DtfParams {
     pub kernel: Kernel,
     /// Removal of negative coefficients.
     pub clamp: Clamp,
+    /// Floor of sigma for allocation, as a share of the image's mean sigma (0: the paper's
+    /// raw formula). See [`robust_stats`].
+    pub sigma_floor: f32,
+    /// Floor of ||C_d|| for allocation, as a share of the image's mean ||C_d||.
+    pub norm_floor: f32,
+    /// Budget mode: allocation weights sigma^2/||C_d|| are clipped at this multiple of their
+    /// median (0: no clipping, the paper's raw proportionality).
+    pub max_weight_ratio: f32,
 }
 
 impl Default for DtfParams {
@@ -138,6 +146,9 @@ impl Default for DtfParams {
             // it equals the printed closed form whenever nothing is clipped, and unlike
             // the printed clamp it vanishes as N grows (asymptotic unbiasedness).
             clamp: Clamp::ActiveSet,
+            sigma_floor: 0.05,
+            norm_floor: 0.05,
+            max_weight_ratio: 16.0,
         }
     }
 }
@@ -194,14 +205,54 @@ pub fn classify(n: f64, categories: &[u32]) -> u32 {
     if n.is_nan() {
         return last;
     }
+    if n == f64::INFINITY {
+        return N_HARD_MAX;
+    }
     // A relative tolerance of 1e-9 keeps rounding noise (e.g. (3 * 0.1 / 0.03)^2 - 50 =
     // 50.00000000000004) from pushing a value into the next category.
     let n = n - 1e-9 * n.abs().max(1.0);
-    categories
-        .iter()
-        .copied()
-        .find(|&c| c as f64 >= n)
-        .unwrap_or(last)
+    if let Some(c) = categories.iter().copied().find(|&c| c as f64 >= n) {
+        return c;
+    }
+    // Past the largest category the classes go on doubling (last, 2 last, 4 last, ...):
+    // a hard clamp would stop every pixel at the same N as eps_r -> 0 or the budget grows,
+    // and the error would stall instead of falling (asymptotic unbiasedness).
+    let mut c = last.max(1) as u64;
+    while (c as f64) < n && c < N_HARD_MAX as u64 {
+        c *= 2;
+    }
+    c.min(N_HARD_MAX as u64) as u32
+}
+
+/// The largest N ever allocated to one pixel.
+pub const N_HARD_MAX: u32 = 1 << 24;
+
+/// Robust per-pixel (sigma, ||C_d||) for allocation: both floored at a share of their image
+/// means (`DtfParams::sigma_floor`, `norm_floor`). Where the n dependent samples happened to
+/// agree (sigma = 0) or were all black, the raw formula would give N = 0 for ever and keep
+/// the pixel at C_d however much is spent; with the floors every pixel's N grows without
+/// bound as eps_r -> 0 or the budget grows, so DTF stays asymptotically unbiased.
+pub fn robust_stats(dep: &Film, params: &DtfParams) -> Vec<(f64, f64)> {
+    let raw: Vec<(f64, f64)> = dep
+        .pixels
+        .par_iter()
+        .map(|s| {
+            let sg = sigma(s);
+            let c = color_norm(s.mean);
+            (
+                if sg.is_finite() { sg.max(0.0) } else { 0.0 },
+                if c.is_finite() { c } else { 0.0 },
+            )
+        })
+        .collect();
+    let k = raw.len().max(1) as f64;
+    let mean_sigma = raw.iter().map(|r| r.0).sum::<f64>() / k;
+    let mean_norm = raw.iter().map(|r| r.1).sum::<f64>() / k;
+    let sf = params.sigma_floor as f64 * mean_sigma;
+    let cf = params.norm_floor as f64 * mean_norm;
+    raw.into_iter()
+        .map(|(sg, c)| (sg.max(sf), if cf > 0.0 { c.max(cf) } else { c }))
+        .collect()
 }
 
 /// Unclassified N = (3 sigma / (eps_r ||C_d||))^2 - n (paper §5): 3 sigma / sqrt(n + N)
@@ -237,10 +288,12 @@ pub fn samples_for_error(sigma: f64, cd_norm: f64, n: u32, eps_r: f64, categorie
 pub fn allocate_relative(dep: &Film, params: &DtfParams) -> Result<Vec<u32>, String> {
     params.validate()?;
     let eps = params.eps_r as f64;
+    let stats = robust_stats(dep, params);
     Ok(dep
         .pixels
         .par_iter()
-        .map(|s| samples_for_error(sigma(s), color_norm(s.mean), s.n, eps, &params.categories))
+        .zip(stats.par_iter())
+        .map(|(s, &(sg, c))| samples_for_error(sg, c, s.n, eps, &params.categories))
         .collect())
 }
 
@@ -267,25 +320,34 @@ pub fn allocate_budget(dep: &Film, params: &DtfParams, spp_avg: f64) -> Result<V
         ));
     }
     let cats = &params.categories[..];
-    let mut w: Vec<f64> = dep
-        .pixels
-        .par_iter()
-        .map(|s| {
-            let sg = sigma(s);
-            if sg.is_nan() || sg <= 0.0 {
+    let mut w: Vec<f64> = robust_stats(dep, params)
+        .into_iter()
+        .map(|(sg, c)| {
+            if sg <= 0.0 {
                 0.0
+            } else if c > 0.0 {
+                sg * sg / c
             } else {
-                let c = color_norm(s.mean);
-                if c > 0.0 {
-                    sg * sg / c
-                } else {
-                    f64::INFINITY
-                }
+                f64::INFINITY
             }
         })
         .collect();
     if !w.iter().any(|&x| x > 0.0 && x.is_finite()) {
         w.iter_mut().for_each(|x| *x = 1.0);
+    }
+    // sigma^2/||C_d|| from n samples is heavy-tailed (one firefly in the dependent phase
+    // makes one pixel swallow the budget): clip w at `max_weight_ratio` times its median,
+    // which the tail cannot move, and keep the paper's proportionality below that.
+    if params.max_weight_ratio > 0.0 {
+        let mut sorted: Vec<f64> = w.iter().copied().filter(|x| x.is_finite()).collect();
+        if !sorted.is_empty() {
+            let mid = sorted.len() / 2;
+            let (_, med, _) = sorted.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+            let cap = *med * params.max_weight_ratio as f64;
+            if cap > 0.0 {
+                w.iter_mut().for_each(|x| *x = x.min(cap));
+            }
+        }
     }
     let budget = (spp_avg * w.len() as f64).round() as u64;
 
@@ -780,9 +842,11 @@ mod tests {
             (10.0, 10),
             (20.5, 50),
             (499.0, 500),
-            (501.0, 500),
-            (1e30, 500),
-            (f64::INFINITY, 500),
+            // past the largest category the classes double: 1000, 2000, ... up to N_HARD_MAX
+            (501.0, 1000),
+            (1999.0, 2000),
+            (1e30, N_HARD_MAX),
+            (f64::INFINITY, N_HARD_MAX),
             (f64::NAN, 500),
         ];
         for (v, want) in cases {
@@ -802,13 +866,13 @@ mod tests {
         assert_eq!(samples_for_error(0.12, 1.0, 50, 0.03, &c), 100);
         // (3 * 0.05 / 0.03)^2 - 50 = 25 - 50 < 0 -> 0
         assert_eq!(samples_for_error(0.05, 1.0, 50, 0.03, &c), 0);
-        // (3 * 0.3 / 0.03)^2 - 50 = 850 -> clamped to 500
-        assert_eq!(samples_for_error(0.3, 1.0, 50, 0.03, &c), 500);
+        // (3 * 0.3 / 0.03)^2 - 50 = 850 -> the doubled class 1000
+        assert_eq!(samples_for_error(0.3, 1.0, 50, 0.03, &c), 1000);
         // relative: doubling the colour quarters the samples: (3*0.2/(0.03*2))^2 - 10 = 90
         assert!((samples_for_error_raw(0.2, 2.0, 10, 0.03) - 90.0).abs() < 1e-9);
         // black pixels
         assert_eq!(samples_for_error(0.0, 0.0, 50, 0.03, &c), 0);
-        assert_eq!(samples_for_error(0.1, 0.0, 50, 0.03, &c), 500);
+        assert_eq!(samples_for_error(0.1, 0.0, 50, 0.03, &c), N_HARD_MAX);
 
         // Through the film: sigma = 0.1 + 0.02 + 0.03 = 0.15, ||C_d|| = 1,
         // (3 * 0.15 / 0.03)^2 - 50 = 175 -> 200.
@@ -819,10 +883,15 @@ mod tests {
                 px([0.0; 3], [0.0; 3], 50)
             }
         });
-        assert_eq!(
-            allocate_relative(&f, &DtfParams::default()).unwrap(),
-            vec![200, 0]
-        );
+        // the paper's raw formula (no floors): the black pixel needs nothing more
+        let raw = DtfParams {
+            sigma_floor: 0.0,
+            norm_floor: 0.0,
+            ..Default::default()
+        };
+        assert_eq!(allocate_relative(&f, &raw).unwrap(), vec![200, 0]);
+        // with the default floors the black pixel still gets samples (it may not be black)
+        assert!(allocate_relative(&f, &DtfParams::default()).unwrap()[1] > 0);
     }
 
     #[test]
@@ -833,14 +902,22 @@ mod tests {
             let sd = 0.01 + hash(x, y, 2).powi(2) * 3.0;
             px(grey(c), grey(sd), 40)
         });
-        let params = DtfParams::default();
+        // the paper's raw proportionality: no floors, no clipping
+        let params = DtfParams {
+            sigma_floor: 0.0,
+            norm_floor: 0.0,
+            max_weight_ratio: 0.0,
+            ..Default::default()
+        };
         for spp in [3.0, 17.0, 43.0, 120.0] {
             let a = allocate_budget(&f, &params, spp).unwrap();
             let spent: u64 = a.iter().map(|&v| v as u64).sum();
             let budget = spp * (w * h) as f64;
             let rel = (spent as f64 - budget).abs() / budget;
             assert!(rel < 0.02, "spp {spp}: spent {spent} of {budget}");
-            assert!(a.iter().all(|v| params.categories.contains(v)));
+            assert!(a
+                .iter()
+                .all(|v| params.categories.contains(v) || v % 500 == 0));
             // Monotone in w = sigma^2 / ||C_d||.
             let wv: Vec<f64> = f
                 .pixels
@@ -855,9 +932,13 @@ mod tests {
                 }
             }
         }
-        // Out of reach: everyone at the largest category.
-        let a = allocate_budget(&f, &params, 1e6).unwrap();
-        assert!(a.iter().all(|&v| v == 500));
+        // Beyond the largest category the classes go on doubling: large budgets are spent too.
+        let a = allocate_budget(&f, &params, 5000.0).unwrap();
+        let spent: u64 = a.iter().map(|&v| v as u64).sum();
+        assert!(
+            (spent as f64 / (5000.0 * (w * h) as f64) - 1.0).abs() < 0.05,
+            "{spent}"
+        );
         // Zero budget: the smallest category.
         let a = allocate_budget(&f, &params, 0.0).unwrap();
         assert!(a.iter().all(|&v| v == 0));
@@ -1219,5 +1300,92 @@ mod tests {
         };
         assert!(allocate_relative(&d, &bad).is_err());
         assert!(allocate_budget(&d, &DtfParams::default(), -1.0).is_err());
+    }
+}
+
+#[cfg(test)]
+mod robust_tests {
+    use super::*;
+    use crate::film::{Film, PixelStats};
+
+    /// A film where most pixels are noisy and a few had dependent samples that all agreed
+    /// (sigma = 0), one black, one a firefly.
+    fn film() -> Film {
+        let mut f = Film::new(16, 16).unwrap();
+        for (i, p) in f.pixels.iter_mut().enumerate() {
+            let v = 0.5 + (i % 7) as f64 * 0.1;
+            *p = PixelStats {
+                n: 16,
+                mean: [v; 3],
+                m2: [0.04 * 15.0; 3],
+            };
+        }
+        f.pixels[3] = PixelStats {
+            n: 16,
+            mean: [0.4; 3],
+            m2: [0.0; 3],
+        }; // agreeing samples
+        f.pixels[4] = PixelStats {
+            n: 16,
+            mean: [0.0; 3],
+            m2: [0.0; 3],
+        }; // black
+        f.pixels[5] = PixelStats {
+            n: 16,
+            mean: [0.6; 3],
+            m2: [4000.0; 3],
+        }; // firefly
+        f
+    }
+
+    #[test]
+    fn no_pixel_is_starved_and_all_grow_with_the_budget() {
+        let f = film();
+        let p = DtfParams::default();
+        let small = allocate_budget(&f, &p, 20.0).unwrap();
+        let large = allocate_budget(&f, &p, 2000.0).unwrap();
+        for i in [3usize, 4] {
+            assert!(small[i] >= 1, "pixel {i} starved: {}", small[i]);
+            assert!(
+                large[i] > 10 * small[i].max(1) / 2,
+                "pixel {i} does not grow: {} -> {}",
+                small[i],
+                large[i]
+            );
+        }
+        // the firefly cannot swallow the budget: at most ~16x the median share
+        let mut sorted = large.clone();
+        sorted.sort();
+        let median = sorted[sorted.len() / 2] as f64;
+        assert!(
+            (large[5] as f64) <= 40.0 * median,
+            "firefly got {} vs median {median}",
+            large[5]
+        );
+        // prescribed error: as eps_r falls every pixel's N grows without bound
+        let a = allocate_relative(
+            &f,
+            &DtfParams {
+                eps_r: 0.1,
+                ..p.clone()
+            },
+        )
+        .unwrap();
+        let b = allocate_relative(
+            &f,
+            &DtfParams {
+                eps_r: 0.01,
+                ..p.clone()
+            },
+        )
+        .unwrap();
+        for i in 0..a.len() {
+            assert!(
+                b[i] > a[i] || b[i] == N_HARD_MAX,
+                "pixel {i}: {} -> {}",
+                a[i],
+                b[i]
+            );
+        }
     }
 }

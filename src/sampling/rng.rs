@@ -110,7 +110,10 @@ impl SampleStream {
             }
             _ => {
                 // one finaliser per number: the base already mixes seed, stream, pixel, index
-                let h = mix64(self.base.wrapping_add((d as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15)));
+                let h = mix64(
+                    self.base
+                        .wrapping_add((d as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15)),
+                );
                 to_unit((h >> 32) as u32)
             }
         }

@@ -1,0 +1,89 @@
+//! Dependent-tests driven filtering through the whole pipeline: asymptotically unbiased
+//! (the furnace stays 1; the error keeps falling with the budget), and the budget is spent.
+
+mod common;
+use common::*;
+use kalos::filter::dtf::DtfParams;
+use kalos::pipeline::{render_dtf, DtfBudget};
+
+#[test]
+fn dtf_on_the_furnace_is_one() {
+    let scene = kalos::scene::load("furnace").unwrap();
+    let set = settings(&scene, 16, 16);
+    let params = DtfParams {
+        n: 16,
+        ..Default::default()
+    };
+    let run = render_dtf(&scene, &set, &params, DtfBudget::Spp(400.0), None).unwrap();
+    // the displayed image: every channel of every pixel near 1, the mean very near 1
+    let img = &run.out.combined;
+    let mean = img.mean();
+    for c in 0..3 {
+        assert!((mean[c] - 1.0).abs() < 0.03, "mean {mean:?}");
+    }
+    // and pixel by pixel only noise: the RMS deviation from 1 is small
+    let rms = (img
+        .data
+        .iter()
+        .flat_map(|p| p.iter())
+        .map(|v| ((v - 1.0) as f64).powi(2))
+        .sum::<f64>()
+        / (3 * img.data.len()) as f64)
+        .sqrt();
+    assert!(rms < 0.08, "RMS deviation from 1 is {rms}");
+}
+
+#[test]
+fn budget_mode_spends_the_budget() {
+    let scene = kalos::scene::load("cornell").unwrap();
+    let set = settings(&scene, 32, 32);
+    let params = DtfParams {
+        n: 8,
+        ..Default::default()
+    };
+    let run = render_dtf(&scene, &set, &params, DtfBudget::Spp(40.0), None).unwrap();
+    let pixels = 32.0 * 32.0;
+    let phase2 = run.independent.total_samples() as f64 / pixels;
+    assert_eq!(run.dependent.total_samples() as f64 / pixels, 8.0);
+    assert!(
+        (phase2 - 32.0).abs() / 32.0 < 0.05,
+        "phase 2 averaged {phase2} spp instead of 32"
+    );
+    // and N varies across the image (the allocation is adaptive)
+    let (lo, hi) = (
+        run.alloc.iter().min().unwrap(),
+        run.alloc.iter().max().unwrap(),
+    );
+    assert!(hi > lo);
+}
+
+#[test]
+fn dtf_error_keeps_falling_with_the_budget() {
+    // No bias floor: against a high-spp plain render, DTF's error falls as the budget grows.
+    let scene = kalos::scene::load("cornell").unwrap();
+    let set = settings(&scene, 48, 48);
+    let reference = render_spp(&scene, &set, 4096).mean_rgb();
+    let params = DtfParams {
+        n: 16,
+        ..Default::default()
+    };
+    let mut last = f64::INFINITY;
+    let mut errs = Vec::new();
+    for budget in [32.0, 128.0, 512.0] {
+        let run = render_dtf(&scene, &set, &params, DtfBudget::Spp(budget), None).unwrap();
+        let mse: f64 = run
+            .out
+            .combined
+            .data
+            .iter()
+            .zip(reference.iter())
+            .map(|(a, b)| (0..3).map(|c| ((a[c] - b[c]) as f64).powi(2)).sum::<f64>())
+            .sum::<f64>()
+            / (3.0 * reference.len() as f64);
+        errs.push(mse.sqrt());
+        assert!(mse.sqrt() < last, "RMSE does not keep falling: {errs:?}");
+        last = mse.sqrt();
+    }
+    // and by a real factor over the 16x larger budget
+    assert!(errs[2] < 0.75 * errs[0], "{errs:?}");
+}
