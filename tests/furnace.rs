@@ -43,6 +43,7 @@ fn furnace_is_one_everywhere() {
 }
 
 #[test]
+#[allow(clippy::needless_range_loop)]
 fn furnace_with_dependent_tests_is_one() {
     // Dependent tests: pixels share random numbers, so test each pixel on its own.
     let scene = kalos::scene::load("furnace").unwrap();

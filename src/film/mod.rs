@@ -17,6 +17,7 @@ pub struct PixelStats {
 impl PixelStats {
     /// Add one sample (Welford's update). The caller has checked it is finite.
     #[inline]
+    #[allow(clippy::needless_range_loop)]
     pub fn push(&mut self, v: [f32; 3]) {
         self.n += 1;
         let inv = 1.0 / self.n as f64;

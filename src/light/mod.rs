@@ -96,6 +96,7 @@ impl Lights {
         &self.lights
     }
     /// Total emitted power (sum of Le x area x pi), per RGB channel.
+    #[allow(clippy::needless_range_loop)]
     pub fn total_power_rgb(&self) -> [f64; 3] {
         let mut p = [0.0f64; 3];
         for l in &self.lights {

@@ -15,7 +15,7 @@ impl CameraDesc {
     /// Parse "ox,oy,oz,tx,ty,tz,ux,uy,uz,fov" (the `--camera` option).
     pub fn parse(s: &str) -> Result<CameraDesc, String> {
         let v: Vec<f32> = s
-            .split(|c| c == ',' || c == ' ')
+            .split([',', ' '])
             .filter(|t| !t.is_empty())
             .map(|t| {
                 t.parse::<f32>()

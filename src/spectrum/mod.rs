@@ -146,16 +146,16 @@ macro_rules! elementwise {
             fn $f(self, o: Self) -> Self {
                 let mut s = self.0;
                 for i in 0..N {
-                    s[i] = s[i] $op o.0[i];
+                    s[i] $op o.0[i];
                 }
                 Spectrum(s)
             }
         }
     };
 }
-elementwise!(Add, add, +);
-elementwise!(Sub, sub, -);
-elementwise!(Mul, mul, *);
+elementwise!(Add, add, +=);
+elementwise!(Sub, sub, -=);
+elementwise!(Mul, mul, *=);
 
 impl<const N: usize> Mul<f32> for Spectrum<N> {
     type Output = Self;
