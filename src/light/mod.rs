@@ -4,13 +4,15 @@
 //! (density per area) and a direction (cosine-weighted, per solid angle), as light
 //! tracing, BDPT and radiosity shooting need.
 
+use crate::material::AlbedoTable;
 use crate::math::{Frame, Vec3};
 use crate::sampling::{square_to_cosine_hemisphere, square_to_uniform_triangle, Distribution1D};
 use crate::scene::Material;
 use glam::Vec2;
+use std::sync::Arc;
 
 /// One emissive triangle.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct AreaLight {
     pub tri: u32,
     pub v0: Vec3,
@@ -19,8 +21,10 @@ pub struct AreaLight {
     /// Unit normal of the emitting side.
     pub n: Vec3,
     pub area: f32,
-    /// Emitted radiance, linear RGB.
+    /// Emitted radiance, linear RGB (the cosine-weighted average if `table` is set).
     pub le: [f32; 3],
+    /// Directional emission L_e(w) = 1 - a(cos theta) (see `Material::emission_table`).
+    pub table: Option<Arc<AlbedoTable>>,
 }
 
 /// A point sampled on an emitter.
@@ -28,6 +32,7 @@ pub struct AreaLight {
 pub struct LightSample {
     pub p: Vec3,
     pub n: Vec3,
+    /// The cosine-weighted average emission (`Lights::emitted` gives it per direction).
     pub le: [f32; 3],
     /// Density per unit area, including the choice of the light.
     pub pdf_area: f32,
@@ -66,6 +71,7 @@ impl Lights {
                 n: c.normalize(),
                 area,
                 le: m.emission,
+                table: m.emission_table.clone(),
             });
         }
         let power: Vec<f32> = lights
@@ -104,6 +110,16 @@ impl Lights {
             }
         }
         p
+    }
+
+    /// Radiance light `i` emits towards a direction at cosine `cos` to its normal.
+    #[inline]
+    pub fn emitted(&self, i: u32, cos: f32) -> [f32; 3] {
+        let l = &self.lights[i as usize];
+        match &l.table {
+            None => l.le,
+            Some(t) => t.complement(cos),
+        }
     }
 
     /// Light index of scene triangle `prim`, if it emits.
@@ -161,6 +177,7 @@ mod tests {
             name: "l".into(),
             bsdf: Bsdf::Black,
             emission: le,
+            emission_table: None,
             kd_texture: None,
         }
     }

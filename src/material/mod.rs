@@ -6,11 +6,13 @@
 //! `Bsdf::lobes` gives each lobe with its own sample/pdf/albedo, so a roulette or a
 //! lobe-selection strategy can choose among them.
 
+pub mod albedo;
 pub mod dielectric;
 pub mod lambert;
 pub mod mirror;
 pub mod phong;
 
+pub use albedo::AlbedoTable;
 pub use dielectric::Dielectric;
 pub use lambert::Lambert;
 pub use mirror::Mirror;
