@@ -55,8 +55,8 @@ pub fn radiance<const N: usize>(
         let wo = -ray.d;
 
         // Emission (one-sided: the counter-clockwise side), MIS-weighted against NEE.
-        let cos_o = wo.dot(hit.ng);
-        if mat.is_emissive() && cos_o > 0.0 {
+        if mat.is_emissive() && wo.dot(hit.ng) > 0.0 {
+            let cos_o = wo.dot(hit.ng);
             let le = Spectrum::<N>::from_rgb(mat.emitted(cos_o));
             let w = if prev_delta {
                 1.0
@@ -113,7 +113,7 @@ pub fn radiance<const N: usize>(
                         if !scene.bvh.occluded(&Ray::new(o, to), 1.0 - 1e-4) {
                             let pdf_light = ls.pdf_area * dist2 / cos_l;
                             let w = power_heuristic(pdf_light, sel.pdf(&bsdf, wo_l, wi_l));
-                            let le = scene.lights.emitted(ls.light, cos_l);
+                            let le = ls.emitted(&scene.lights, cos_l);
                             l += beta * f * Spectrum::from_rgb(le) * (w / pdf_light);
                         }
                     }
@@ -122,9 +122,9 @@ pub fn radiance<const N: usize>(
         }
 
         // Roulette and continuation (integrator/rr.rs).
-        let step = sel.sample(&bsdf, wo_l, u_lobe, u_bsdf, u_rr);
+        let step = sel.sample::<N>(&bsdf, wo_l, u_lobe, u_bsdf, u_rr);
         let terminated = matches!(step, Step::Terminated);
-        if let Some(e) = rr.estimate_term(&sel, terminated, &beta, &l_tilde) {
+        if let Some(e) = rr.estimate_term(&sel, &bsdf, terminated, &beta, &l_tilde) {
             l += e;
         }
         let Step::Continue { sample: bs, scale } = step else {

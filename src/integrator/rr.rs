@@ -199,7 +199,7 @@ pub fn spectral_probability<const N: usize>(
 /// probabilities of the lobes and of going on. Estimators compute it once per reflection
 /// and use it for both next-event estimation (its `pdf`) and the continuation (`sample`).
 #[derive(Clone, Copy, Debug)]
-pub struct Selection<const N: usize> {
+pub struct Selection {
     /// `Mixture` also for BSDFs without elementary lobes (mirror, glass).
     select: BsdfSelect,
     /// s_i of the lobes (methods 1-3).
@@ -207,8 +207,6 @@ pub struct Selection<const N: usize> {
     n: usize,
     /// s = sum_i s_i, the probability that the walk goes on (1: no roulette here).
     pub s_total: f32,
-    /// The local albedo a (per band): the classic roulette's input and the estimate's a.
-    pub albedo: Spectrum<N>,
 }
 
 /// The outcome of a reflection.
@@ -284,43 +282,55 @@ impl Roulette {
     }
 
     /// The selection at reflection `bounce` of a walk arriving with spectral weight `f`.
-    #[inline]
-    pub fn select<const N: usize>(
-        &self,
-        bounce: u32,
-        f: &Spectrum<N>,
-        bsdf: &Bsdf,
-    ) -> Selection<N> {
-        let albedo = bsdf.albedo::<N>();
+    /// (The default mixture stays inline in the estimators' loops; methods 1-3 are calls.)
+    #[inline(always)]
+    pub fn select<const N: usize>(&self, bounce: u32, f: &Spectrum<N>, bsdf: &Bsdf) -> Selection {
         if self.select != BsdfSelect::Mixture {
-            let (lobes, n) = bsdf.lobe_array();
-            if n > 0 {
-                let (s, can_stop) = self.lobe_probabilities(bounce, f, &lobes[..n]);
-                return Selection {
-                    select: self.select,
-                    s,
-                    n,
-                    s_total: if can_stop { s.iter().sum() } else { 1.0 },
-                    albedo,
-                };
+            if let Some(sel) = self.select_lobe(bounce, f, bsdf) {
+                return sel;
             }
         }
         Selection {
             select: BsdfSelect::Mixture,
             s: [0.0; MAX_LOBES],
             n: 0,
-            s_total: self.continuation(bounce, f, &albedo),
-            albedo,
+            s_total: if self.active(bounce) {
+                self.continuation(bounce, f, &bsdf.albedo::<N>())
+            } else {
+                1.0
+            },
         }
+    }
+
+    #[inline(never)]
+    fn select_lobe<const N: usize>(
+        &self,
+        bounce: u32,
+        f: &Spectrum<N>,
+        bsdf: &Bsdf,
+    ) -> Option<Selection> {
+        let (lobes, n) = bsdf.lobe_array();
+        if n == 0 {
+            return None;
+        }
+        let (s, can_stop) = self.lobe_probabilities(bounce, f, &lobes[..n]);
+        Some(Selection {
+            select: self.select,
+            s,
+            n,
+            s_total: if can_stop { s.iter().sum() } else { 1.0 },
+        })
     }
 
     /// The estimate roulette's addition to the estimator at a reflection reached with
     /// spectral weight `f` (None for the other roulettes or where the walk cannot end):
-    /// terminated, F a L~; continued, -F (1 - s) a L~ / s.
+    /// terminated, F a L~; continued, -F (1 - s) a L~ / s, with a the local albedo (the
+    /// same bound the classic roulette uses).
     #[inline]
     pub fn estimate_term<const N: usize>(
         &self,
-        sel: &Selection<N>,
+        sel: &Selection,
+        bsdf: &Bsdf,
         terminated: bool,
         f: &Spectrum<N>,
         l_tilde: &Spectrum<N>,
@@ -328,7 +338,7 @@ impl Roulette {
         if !self.mode.uses_estimate() || sel.s_total >= 1.0 {
             return None;
         }
-        let a_l = *f * sel.albedo * *l_tilde;
+        let a_l = *f * bsdf.albedo::<N>() * *l_tilde;
         Some(if terminated {
             a_l
         } else {
@@ -337,7 +347,7 @@ impl Roulette {
     }
 }
 
-impl<const N: usize> Selection<N> {
+impl Selection {
     /// s_i of lobe i (methods 1-3).
     pub fn probabilities(&self) -> &[f32] {
         &self.s[..self.n]
@@ -346,11 +356,16 @@ impl<const N: usize> Selection<N> {
     /// Solid-angle density with which the continuation produces `wi`, given that the walk
     /// goes on: what multiple importance sampling against light sampling weighs with.
     /// Mixture: the mixture density; methods 1-3: sum_j s_j p_j / sum_j s_j.
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
         if self.select == BsdfSelect::Mixture {
             return bsdf.pdf(wo, wi);
         }
+        self.pdf_lobes(bsdf, wo, wi)
+    }
+
+    #[inline(never)]
+    fn pdf_lobes(&self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
         let (lobes, _) = bsdf.lobe_array();
         let (mut num, mut den) = (0.0f32, 0.0f32);
         for (&s_j, lobe) in self.s[..self.n].iter().zip(&lobes) {
@@ -369,8 +384,15 @@ impl<const N: usize> Selection<N> {
     /// Decide the reflection: end the walk, or choose a lobe and sample a direction.
     /// Mixture: `u_rr` plays the roulette, `u_lobe` picks the mixture's lobe; methods 1-3:
     /// `u_lobe` alone chooses among the lobes (s_i) and termination (1 - sum_i s_i).
-    #[inline]
-    pub fn sample(&self, bsdf: &Bsdf, wo: Vec3, u_lobe: f32, u_dir: Vec2, u_rr: f32) -> Step<N> {
+    #[inline(always)]
+    pub fn sample<const N: usize>(
+        &self,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        u_lobe: f32,
+        u_dir: Vec2,
+        u_rr: f32,
+    ) -> Step<N> {
         if self.select == BsdfSelect::Mixture {
             let q = self.s_total;
             if q < 1.0 && u_rr >= q {
@@ -384,6 +406,18 @@ impl<const N: usize> Selection<N> {
                 None => Step::Absorbed,
             };
         }
+        self.sample_lobe(bsdf, wo, u_lobe, u_dir)
+    }
+
+    /// Methods 1-3: `u_lobe` chooses lobe i or termination, then lobe i samples wi.
+    #[inline(never)]
+    fn sample_lobe<const N: usize>(
+        &self,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        u_lobe: f32,
+        u_dir: Vec2,
+    ) -> Step<N> {
         // Lobe i with probability s_i, termination with 1 - s.
         let mut acc = 0.0;
         let mut chosen = None;

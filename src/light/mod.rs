@@ -32,11 +32,25 @@ pub struct AreaLight {
 pub struct LightSample {
     pub p: Vec3,
     pub n: Vec3,
-    /// The cosine-weighted average emission (`Lights::emitted` gives it per direction).
+    /// Emitted radiance; if `directional`, its cosine-weighted average (`emitted` gives
+    /// it per direction).
     pub le: [f32; 3],
+    pub directional: bool,
     /// Density per unit area, including the choice of the light.
     pub pdf_area: f32,
     pub light: u32,
+}
+
+impl LightSample {
+    /// Radiance the sampled point emits towards a direction at cosine `cos` to its normal.
+    #[inline(always)]
+    pub fn emitted(&self, lights: &Lights, cos: f32) -> [f32; 3] {
+        if self.directional {
+            lights.emitted(self.light, cos)
+        } else {
+            self.le
+        }
+    }
 }
 
 pub struct Lights {
@@ -113,7 +127,9 @@ impl Lights {
     }
 
     /// Radiance light `i` emits towards a direction at cosine `cos` to its normal.
-    #[inline]
+    /// (Out of line: the path tracer's loop runs faster without it; `LightSample::emitted`
+    /// calls it only for directional emitters.)
+    #[inline(never)]
     pub fn emitted(&self, i: u32, cos: f32) -> [f32; 3] {
         let l = &self.lights[i as usize];
         match &l.table {
@@ -143,6 +159,7 @@ impl Lights {
             p,
             n: l.n,
             le: l.le,
+            directional: l.table.is_some(),
             pdf_area: pmf / l.area,
             light: i as u32,
         })

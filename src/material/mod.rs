@@ -182,7 +182,7 @@ impl Bsdf {
     }
 
     /// Sample wi given wo; `u_lobe` chooses a lobe (or reflection vs refraction), `u` the direction.
-    #[inline]
+    #[inline(always)]
     pub fn sample<const N: usize>(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample<N>> {
         match self {
             Bsdf::Black => None,

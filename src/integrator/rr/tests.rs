@@ -161,7 +161,7 @@ fn a_lobe_that_cannot_carry_the_spectrum_is_never_chosen() {
     let mut rng = TestRng::new(9);
     for _ in 0..1000 {
         if let Step::Continue { sample, .. } =
-            sel.sample(&bsdf, wo_at(30.0), rng.next_f32(), rng.next_2d(), 0.5)
+            sel.sample::<3>(&bsdf, wo_at(30.0), rng.next_f32(), rng.next_2d(), 0.5)
         {
             // only the glossy lobe is chosen: its weight is blue only
             assert_eq!(sample.weight[0], 0.0);
@@ -250,10 +250,11 @@ fn estimate_roulette_is_unbiased_for_any_guess() {
             let sel = r.select::<3>(0, &f, &bsdf);
             let s = sel.s_total;
             assert!(s > 0.0 && s < 1.0, "{s}");
-            let stop = r.estimate_term(&sel, true, &f, &l_tilde).unwrap();
-            let go = r.estimate_term(&sel, false, &f, &l_tilde).unwrap();
+            let stop = r.estimate_term(&sel, &bsdf, true, &f, &l_tilde).unwrap();
+            let go = r.estimate_term(&sel, &bsdf, false, &f, &l_tilde).unwrap();
+            let albedo = bsdf.albedo::<3>();
             for c in 0..3 {
-                let a_l = f[c] * sel.albedo[c] * l_tilde[c];
+                let a_l = f[c] * albedo[c] * l_tilde[c];
                 assert!((stop[c] - a_l).abs() < 1e-6);
                 assert!((go[c] + (1.0 - s) / s * a_l).abs() < 1e-6);
                 let e = s * (x[c] / s + go[c]) + (1.0 - s) * stop[c];
@@ -264,7 +265,7 @@ fn estimate_roulette_is_unbiased_for_any_guess() {
     // the other roulettes add nothing
     let r = roulette(RrMode::Classic, RrWeight::Luminance, BsdfSelect::Mixture);
     let sel = r.select::<3>(0, &f, &bsdf);
-    assert!(r.estimate_term(&sel, true, &f, &l_tilde).is_none());
+    assert!(r.estimate_term(&sel, &bsdf, true, &f, &l_tilde).is_none());
 }
 
 /// sum_i s_i E_{p_i}[W_i / s_i] by stratified sampling of each lobe: must be the
@@ -403,7 +404,7 @@ fn selection_chooses_lobes_with_probability_s_i() {
     let (mut stop, mut glossy, mut diffuse) = (0, 0, 0);
     for k in 0..n {
         let u = (k as f32 + 0.5) / n as f32;
-        match sel.sample(&bsdf, wo, u, Vec2::new(0.3, 0.7), 0.0) {
+        match sel.sample::<3>(&bsdf, wo, u, Vec2::new(0.3, 0.7), 0.0) {
             Step::Terminated => stop += 1,
             // the n = 1000 lobe stays within a few degrees of the mirror direction (+z)
             Step::Continue { sample, .. } if sample.wi.z > 0.99 => glossy += 1,
@@ -420,7 +421,7 @@ fn selection_chooses_lobes_with_probability_s_i() {
     let sel = off.select::<3>(0, &Spectrum::ONE, &bsdf);
     assert_eq!(sel.s_total, 1.0);
     assert!(!matches!(
-        sel.sample(&bsdf, wo, 0.999_999_9, Vec2::new(0.3, 0.7), 0.0),
+        sel.sample::<3>(&bsdf, wo, 0.999_999_9, Vec2::new(0.3, 0.7), 0.0),
         Step::Terminated
     ));
 }
@@ -436,7 +437,7 @@ fn methods_agree_on_a_single_lobe() {
     for select in [BsdfSelect::Decompose, BsdfSelect::Static, BsdfSelect::Mis] {
         let r = roulette(RrMode::Classic, RrWeight::Luminance, select);
         let sel = r.select::<3>(0, &Spectrum::ONE, &bsdf);
-        match sel.sample(&bsdf, wo, 0.1, Vec2::new(0.2, 0.9), 0.0) {
+        match sel.sample::<3>(&bsdf, wo, 0.1, Vec2::new(0.2, 0.9), 0.0) {
             Step::Continue { sample, scale } => out.push((sample.weight * scale, sample.pdf)),
             s => panic!("{s:?}"),
         }
