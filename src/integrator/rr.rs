@@ -250,6 +250,8 @@ impl Roulette {
         if self.mode.is_spectral() {
             spectral_probability(f, a, &self.weight.h::<N>())
         } else {
+            // The classic roulette: the albedo's luminance exactly as before issue 4 (raw
+            // weights, so the default renders are bit-identical), or its average.
             match self.weight {
                 RrWeight::Luminance => a.luminance(),
                 RrWeight::Flat => a.average(),
