@@ -80,7 +80,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Render(args) => render::run(args),
         Command::Scenes => {
             for (name, what) in crate::scene::builtin::describe() {
-                println!("{name:<10} {what}");
+                println!("{name:<15} {what}");
             }
             Ok(())
         }

@@ -2,7 +2,9 @@
 
 use crate::film::Film;
 use crate::image_io::{write_image, ExtraLayer, LayerData, RgbImage};
-use crate::integrator::{IntegratorKind, IntegratorSettings, Roulette, RrMode};
+use crate::integrator::{
+    BsdfSelect, IntegratorKind, IntegratorSettings, Roulette, RrMode, RrWeight,
+};
 use crate::pipeline::{render, Budget, RenderSettings};
 use crate::sampling::{SamplerConfig, SamplerKind};
 use crate::scene::CameraDesc;
@@ -49,12 +51,19 @@ pub struct RenderArgs {
     /// Mitsuba's max_depth: 1 = emitters seen directly, 2 = direct light, -1 = unlimited.
     #[arg(long, allow_hyphen_values = true, value_parser = parse_depth)]
     pub max_depth: Option<i32>,
-    /// Russian roulette: classic | off.
+    /// Russian roulette: classic | spectral | estimate | spectral-estimate | off.
     #[arg(long, default_value = "classic", value_parser = parse_rr)]
     pub rr: RrMode,
+    /// Wavelength weights h of the roulette: luminance | flat.
+    #[arg(long, default_value = "luminance", value_parser = parse_rr_weight)]
+    pub rr_weight: RrWeight,
     /// Reflections before roulette starts (0: at every reflection).
     #[arg(long, default_value_t = 0)]
     pub rr_min_depth: u32,
+    /// Lobe selection of combined BRDFs: mixture | decompose | static | mis (the roulette
+    /// paper's methods 1, 2, 3, with termination folded in).
+    #[arg(long, default_value = "mixture", value_parser = parse_bsdf_select)]
+    pub bsdf_select: BsdfSelect,
     /// Camera "ox,oy,oz,tx,ty,tz,ux,uy,uz,fov" (overrides the scene's).
     #[arg(long, allow_hyphen_values = true, value_parser = CameraDesc::parse)]
     pub camera: Option<CameraDesc>,
@@ -170,7 +179,15 @@ fn parse_integrator(s: &str) -> Result<IntegratorKind, String> {
     IntegratorKind::parse(s).ok_or_else(|| format!("{s:?}: expected path"))
 }
 fn parse_rr(s: &str) -> Result<RrMode, String> {
-    RrMode::parse(s).ok_or_else(|| format!("{s:?}: expected classic or off"))
+    RrMode::parse(s).ok_or_else(|| {
+        format!("{s:?}: expected classic, spectral, estimate, spectral-estimate or off")
+    })
+}
+fn parse_rr_weight(s: &str) -> Result<RrWeight, String> {
+    RrWeight::parse(s).ok_or_else(|| format!("{s:?}: expected luminance or flat"))
+}
+fn parse_bsdf_select(s: &str) -> Result<BsdfSelect, String> {
+    BsdfSelect::parse(s).ok_or_else(|| format!("{s:?}: expected mixture, decompose, static or mis"))
 }
 fn parse_depth(s: &str) -> Result<i32, String> {
     let d: i32 = s
@@ -205,6 +222,9 @@ pub struct RenderStats {
     pub dependent: bool,
     pub max_depth: i32,
     pub rr: RrMode,
+    pub rr_weight: RrWeight,
+    pub rr_min_depth: u32,
+    pub bsdf_select: BsdfSelect,
     pub seed: u64,
     pub method: String,
     pub mean_rgb: [f64; 3],
@@ -289,6 +309,8 @@ pub fn execute(a: &RenderArgs, scene: &crate::scene::Scene) -> Result<Rendered, 
             max_depth: a.max_depth.or(scene.defaults.max_depth).unwrap_or(-1),
             roulette: Roulette {
                 mode: a.rr,
+                weight: a.rr_weight,
+                select: a.bsdf_select,
                 min_depth: a.rr_min_depth,
             },
         },
@@ -376,6 +398,9 @@ pub fn execute(a: &RenderArgs, scene: &crate::scene::Scene) -> Result<Rendered, 
         dependent: a.dependent,
         max_depth: set.integrator.max_depth,
         rr: a.rr,
+        rr_weight: a.rr_weight,
+        rr_min_depth: a.rr_min_depth,
+        bsdf_select: a.bsdf_select,
         seed: a.seed,
         method: a.method.clone(),
         mean_rgb: image.mean(),
@@ -434,6 +459,16 @@ pub fn write_output(
 ) -> Result<(), String> {
     let var = film.variance_rgb();
     let cnt = film.counts();
+    // 1 where a channel of the pixel's estimate is negative (the estimate roulette can
+    // make it so; the roulette paper's figure 4, right).
+    let neg: Vec<f32> = if aovs {
+        img.data
+            .iter()
+            .map(|p| if p.iter().any(|&v| v < 0.0) { 1.0 } else { 0.0 })
+            .collect()
+    } else {
+        vec![]
+    };
     let extra = if aovs {
         vec![
             ExtraLayer {
@@ -443,6 +478,10 @@ pub fn write_output(
             ExtraLayer {
                 name: "count",
                 channels: LayerData::Mono(&cnt),
+            },
+            ExtraLayer {
+                name: "negative",
+                channels: LayerData::Mono(&neg),
             },
         ]
     } else {

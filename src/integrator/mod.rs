@@ -7,7 +7,7 @@ pub mod rr;
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::Scene;
 
-pub use rr::{Roulette, RrMode};
+pub use rr::{BsdfSelect, Roulette, RrMode, RrWeight};
 
 /// Paths deeper than this end regardless (a guard for unlimited depth without roulette
 /// in closed glass or white rooms; the throughput left there is below f32 precision).

@@ -5,8 +5,13 @@
 //! so 1 gives emitters seen directly and 2 direct lighting. Random dimensions are fixed
 //! per bounce (2 for the pixel, then `DIMS_PER_BOUNCE` each), so a dimension means the
 //! same decision in every sample, which dependent tests and Sobol both rely on.
+//!
+//! Every roulette and lobe-selection decision is `integrator::rr`'s: at each reflection the
+//! path asks it for a `Selection` (from the throughput F so far), weighs next-event
+//! estimation against the selection's density, and lets it decide the continuation.
 
 use super::camera_ray;
+use super::rr::Step;
 use super::{intersect, Counters, IntegratorSettings};
 use crate::math::{offset_origin, Frame, Ray};
 use crate::sampling::{power_heuristic, SampleStream};
@@ -32,6 +37,13 @@ pub fn radiance<const N: usize>(
     let mut prev_delta = true;
     let max_segments = set.max_segments();
     let mut segments = 0u32;
+    let rr = &set.roulette;
+    // L~ of the estimate roulette (once per scene, copied per path).
+    let l_tilde = if rr.mode.uses_estimate() {
+        scene.radiance_estimate.l_tilde::<N>()
+    } else {
+        Spectrum::ZERO
+    };
     c.paths += 1;
     loop {
         c.rays += 1;
@@ -44,13 +56,13 @@ pub fn radiance<const N: usize>(
 
         // Emission (one-sided: the counter-clockwise side), MIS-weighted against NEE.
         if mat.is_emissive() && wo.dot(hit.ng) > 0.0 {
-            let le = Spectrum::<N>::from_rgb(mat.emission);
+            let cos_o = wo.dot(hit.ng);
+            let le = Spectrum::<N>::from_rgb(mat.emitted(cos_o));
             let w = if prev_delta {
                 1.0
             } else {
                 let li = scene.lights.light_of(hit.prim).unwrap_or(0);
-                let cos_l = wo.dot(hit.ng);
-                let pdf_light = scene.lights.pdf_position(li) * hit.t * hit.t / cos_l;
+                let pdf_light = scene.lights.pdf_position(li) * hit.t * hit.t / cos_o;
                 power_heuristic(prev_pdf, pdf_light)
             };
             l += beta * le * w;
@@ -80,6 +92,9 @@ pub fn radiance<const N: usize>(
         let u_bsdf = s.next_2d();
         let u_rr = s.next_1d();
 
+        // The roulette's selection at this reflection, from the throughput F = beta.
+        let sel = rr.select::<N>(segments - 1, &beta, &bsdf);
+
         // Next-event estimation.
         if !bsdf.is_delta() {
             if let Some(ls) = scene.lights.sample_position(u_sel, u_light) {
@@ -97,16 +112,22 @@ pub fn radiance<const N: usize>(
                         c.rays += 1;
                         if !scene.bvh.occluded(&Ray::new(o, to), 1.0 - 1e-4) {
                             let pdf_light = ls.pdf_area * dist2 / cos_l;
-                            let w = power_heuristic(pdf_light, bsdf.pdf(wo_l, wi_l));
-                            l += beta * f * Spectrum::from_rgb(ls.le) * (w / pdf_light);
+                            let w = power_heuristic(pdf_light, sel.pdf(&bsdf, wo_l, wi_l));
+                            let le = ls.emitted(&scene.lights, cos_l);
+                            l += beta * f * Spectrum::from_rgb(le) * (w / pdf_light);
                         }
                     }
                 }
             }
         }
 
-        // Continue the path by sampling the BSDF.
-        let Some(bs) = bsdf.sample::<N>(wo_l, u_lobe, u_bsdf) else {
+        // Roulette and continuation (integrator/rr.rs).
+        let step = sel.sample::<N>(&bsdf, wo_l, u_lobe, u_bsdf, u_rr);
+        let terminated = matches!(step, Step::Terminated);
+        if let Some(e) = rr.estimate_term(&sel, &bsdf, terminated, &beta, &l_tilde) {
+            l += e;
+        }
+        let Step::Continue { sample: bs, scale } = step else {
             break;
         };
         let wi = frame.to_world(bs.wi);
@@ -115,16 +136,8 @@ pub fn radiance<const N: usize>(
             break;
         }
         beta *= bs.weight;
-
-        // Russian roulette (integrator/rr.rs).
-        let q = set
-            .roulette
-            .continuation::<N>(segments - 1, &bsdf.albedo::<N>());
-        if q < 1.0 {
-            if u_rr >= q {
-                break;
-            }
-            beta *= 1.0 / q;
+        if scale != 1.0 {
+            beta *= scale;
         }
         if beta.is_black() {
             break;

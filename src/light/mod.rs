@@ -4,13 +4,15 @@
 //! (density per area) and a direction (cosine-weighted, per solid angle), as light
 //! tracing, BDPT and radiosity shooting need.
 
+use crate::material::AlbedoTable;
 use crate::math::{Frame, Vec3};
 use crate::sampling::{square_to_cosine_hemisphere, square_to_uniform_triangle, Distribution1D};
 use crate::scene::Material;
 use glam::Vec2;
+use std::sync::Arc;
 
 /// One emissive triangle.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct AreaLight {
     pub tri: u32,
     pub v0: Vec3,
@@ -19,8 +21,10 @@ pub struct AreaLight {
     /// Unit normal of the emitting side.
     pub n: Vec3,
     pub area: f32,
-    /// Emitted radiance, linear RGB.
+    /// Emitted radiance, linear RGB (the cosine-weighted average if `table` is set).
     pub le: [f32; 3],
+    /// Directional emission L_e(w) = 1 - a(cos theta) (see `Material::emission_table`).
+    pub table: Option<Arc<AlbedoTable>>,
 }
 
 /// A point sampled on an emitter.
@@ -28,10 +32,25 @@ pub struct AreaLight {
 pub struct LightSample {
     pub p: Vec3,
     pub n: Vec3,
+    /// Emitted radiance; if `directional`, its cosine-weighted average (`emitted` gives
+    /// it per direction).
     pub le: [f32; 3],
+    pub directional: bool,
     /// Density per unit area, including the choice of the light.
     pub pdf_area: f32,
     pub light: u32,
+}
+
+impl LightSample {
+    /// Radiance the sampled point emits towards a direction at cosine `cos` to its normal.
+    #[inline(always)]
+    pub fn emitted(&self, lights: &Lights, cos: f32) -> [f32; 3] {
+        if self.directional {
+            lights.emitted(self.light, cos)
+        } else {
+            self.le
+        }
+    }
 }
 
 pub struct Lights {
@@ -66,6 +85,7 @@ impl Lights {
                 n: c.normalize(),
                 area,
                 le: m.emission,
+                table: m.emission_table.clone(),
             });
         }
         let power: Vec<f32> = lights
@@ -107,6 +127,18 @@ impl Lights {
         p
     }
 
+    /// Radiance light `i` emits towards a direction at cosine `cos` to its normal.
+    /// (Out of line: the path tracer's loop runs faster without it; `LightSample::emitted`
+    /// calls it only for directional emitters.)
+    #[inline(never)]
+    pub fn emitted(&self, i: u32, cos: f32) -> [f32; 3] {
+        let l = &self.lights[i as usize];
+        match &l.table {
+            None => l.le,
+            Some(t) => t.complement(cos),
+        }
+    }
+
     /// Light index of scene triangle `prim`, if it emits.
     #[inline]
     pub fn light_of(&self, prim: u32) -> Option<u32> {
@@ -128,6 +160,7 @@ impl Lights {
             p,
             n: l.n,
             le: l.le,
+            directional: l.table.is_some(),
             pdf_area: pmf / l.area,
             light: i as u32,
         })
@@ -162,6 +195,7 @@ mod tests {
             name: "l".into(),
             bsdf: Bsdf::Black,
             emission: le,
+            emission_table: None,
             kd_texture: None,
         }
     }

@@ -6,11 +6,13 @@
 //! `Bsdf::lobes` gives each lobe with its own sample/pdf/albedo, so a roulette or a
 //! lobe-selection strategy can choose among them.
 
+pub mod albedo;
 pub mod dielectric;
 pub mod lambert;
 pub mod mirror;
 pub mod phong;
 
+pub use albedo::AlbedoTable;
 pub use dielectric::Dielectric;
 pub use lambert::Lambert;
 pub use mirror::Mirror;
@@ -180,7 +182,7 @@ impl Bsdf {
     }
 
     /// Sample wi given wo; `u_lobe` chooses a lobe (or reflection vs refraction), `u` the direction.
-    #[inline]
+    #[inline(always)]
     pub fn sample<const N: usize>(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample<N>> {
         match self {
             Bsdf::Black => None,

@@ -13,10 +13,12 @@ pub use camera::{Camera, CameraDesc};
 pub use texture::Texture;
 
 use crate::accel::Bvh;
+use crate::integrator::rr::RadianceEstimate;
 use crate::light::Lights;
-use crate::material::Bsdf;
+use crate::material::{AlbedoTable, Bsdf};
 use crate::math::{Bounds3, Vec2, Vec3};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A material as files describe it (MTL vocabulary).
@@ -30,6 +32,10 @@ pub struct MaterialDesc {
     pub ke: [f32; 3],
     pub illum: u8,
     pub map_kd: Option<PathBuf>,
+    /// Emit L_e(w) = 1 - a(w) instead of `ke`, a the directional albedo of the material's
+    /// BSDF (tabulated when the scene is built): the radiance of a closed room of such
+    /// surfaces is exactly 1 (`furnace-glossy`). No file format sets it.
+    pub emit_one_minus_albedo: bool,
 }
 
 impl MaterialDesc {
@@ -44,6 +50,7 @@ impl MaterialDesc {
             ke: [0.0; 3],
             illum: 2,
             map_kd: None,
+            emit_one_minus_albedo: false,
         }
     }
 }
@@ -109,14 +116,26 @@ impl SceneDesc {
 pub struct Material {
     pub name: String,
     pub bsdf: Bsdf,
-    /// Emitted radiance (linear RGB) on the front side (counter-clockwise winding).
+    /// Emitted radiance (linear RGB) on the front side (counter-clockwise winding); with
+    /// `emission_table`, its cosine-weighted average (so power = pi x area x emission).
     pub emission: [f32; 3],
+    /// Directional emission L_e(w) = 1 - a(cos theta), a the directional albedo.
+    pub emission_table: Option<Arc<AlbedoTable>>,
     pub kd_texture: Option<u32>,
 }
 
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission.iter().any(|&e| e > 0.0)
+    }
+
+    /// Emitted radiance towards a direction at cosine `cos` to the front-side normal.
+    #[inline]
+    pub fn emitted(&self, cos: f32) -> [f32; 3] {
+        match &self.emission_table {
+            None => self.emission,
+            Some(t) => t.complement(cos),
+        }
     }
 }
 
@@ -147,6 +166,8 @@ pub struct Scene {
     pub textures: Vec<Texture>,
     pub bvh: Bvh,
     pub lights: Lights,
+    /// The estimate roulette's scene-average radiance L~, computed once here.
+    pub radiance_estimate: RadianceEstimate,
     pub camera: CameraDesc,
     pub defaults: RenderDefaults,
     pub info: SceneInfo,
@@ -171,10 +192,18 @@ impl Scene {
                 }),
                 None => None,
             };
+            let bsdf = Bsdf::from_mtl(m.kd, m.ks, m.ns, m.ni, m.illum);
+            let (emission, emission_table) = if m.emit_one_minus_albedo {
+                let t = AlbedoTable::new(&bsdf);
+                (t.hemispherical(true), Some(Arc::new(t)))
+            } else {
+                (m.ke, None)
+            };
             materials.push(Material {
                 name: m.name.clone(),
-                bsdf: Bsdf::from_mtl(m.kd, m.ks, m.ns, m.ni, m.illum),
-                emission: m.ke,
+                bsdf,
+                emission,
+                emission_table,
                 kd_texture,
             });
         }
@@ -182,6 +211,7 @@ impl Scene {
         let bvh = Bvh::build(&desc.positions);
         let bvh_seconds = t0.elapsed().as_secs_f64();
         let lights = Lights::new(&desc.positions, &desc.material, &materials);
+        let radiance_estimate = scene_radiance_estimate(&desc, &materials, &textures, &lights);
         let bounds = desc.bounds();
         let camera = desc.camera.unwrap_or_else(|| default_camera(&bounds));
         let mut warnings = desc.warnings;
@@ -227,6 +257,7 @@ impl Scene {
             textures,
             bvh,
             lights,
+            radiance_estimate,
             camera,
             defaults: desc.defaults,
             info,
@@ -239,6 +270,37 @@ impl Scene {
     pub fn material_of(&self, prim: u32) -> &Material {
         &self.materials[self.tri_material[prim as usize] as usize]
     }
+}
+
+/// The estimate roulette's L~ from the scene's emitted power Phi_e, total area S and
+/// area-weighted albedo a~ (each material's albedo bound, textures by their mean texel).
+fn scene_radiance_estimate(
+    desc: &SceneDesc,
+    materials: &[Material],
+    textures: &[Texture],
+    lights: &Lights,
+) -> RadianceEstimate {
+    let albedo: Vec<[f64; 3]> = materials
+        .iter()
+        .map(|m| {
+            let bsdf = match m.kd_texture {
+                Some(t) => m.bsdf.with_kd(textures[t as usize].mean()),
+                None => m.bsdf,
+            };
+            bsdf.albedo::<3>().0.map(|v| v as f64)
+        })
+        .collect();
+    let mut area = 0.0f64;
+    let mut weighted = [0.0f64; 3];
+    for (t, &m) in desc.positions.iter().zip(&desc.material) {
+        let a = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length() as f64;
+        area += a;
+        for c in 0..3 {
+            weighted[c] += a * albedo[m as usize][c];
+        }
+    }
+    let mean = weighted.map(|w| if area > 0.0 { w / area } else { 0.0 });
+    RadianceEstimate::new(lights.total_power_rgb(), area, mean)
 }
 
 /// A camera on +z looking at the centre of the bounds, 45 degrees vertical.

@@ -40,6 +40,18 @@ impl Texture {
         self.texels[yi * self.width as usize + xi]
     }
 
+    /// Mean texel (linear RGB).
+    pub fn mean(&self) -> [f32; 3] {
+        let mut s = [0.0f64; 3];
+        for t in &self.texels {
+            for c in 0..3 {
+                s[c] += t[c] as f64;
+            }
+        }
+        let k = 1.0 / self.texels.len().max(1) as f64;
+        [(s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32]
+    }
+
     /// Bilinear lookup at (u, v), v = 0 at the bottom of the image.
     #[inline]
     pub fn lookup(&self, u: f32, v: f32) -> [f32; 3] {

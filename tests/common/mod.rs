@@ -23,6 +23,7 @@ pub fn settings(scene: &Scene, w: u32, h: u32) -> RenderSettings {
             roulette: Roulette {
                 mode: RrMode::Classic,
                 min_depth: 0,
+                ..Default::default()
             },
             ..Default::default()
         },
