@@ -138,16 +138,8 @@ fn safe_name(s: &str) -> String {
 pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String> {
     let fname = file.display().to_string();
     let text = std::fs::read_to_string(file).map_err(|e| format!("{fname}: {e}"))?;
-    let ex: ExperimentFile = toml::from_str(&text).map_err(|e| {
-        let line = e
-            .span()
-            .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
-        let msg = e.message().replace('\n', " ");
-        match line {
-            Some(l) => format!("{fname}:{l}: {msg}"),
-            None => format!("{fname}: {msg}"),
-        }
-    })?;
+    let ex: ExperimentFile = toml::from_str(&text)
+        .map_err(|e| crate::scene::toml_scene::toml_error(&fname, &text, e))?;
     let dir = file.parent().unwrap_or(Path::new("."));
     let out = out.unwrap_or_else(|| {
         dir.join(format!(

@@ -84,7 +84,8 @@ pub fn load(path: &Path) -> Result<SceneDesc, String> {
 }
 
 /// First line of a TOML error, with the file name and line.
-fn toml_error(file: &str, text: &str, e: toml::de::Error) -> String {
+/// One-line message for a TOML error: `file:line: message`.
+pub fn toml_error(file: &str, text: &str, e: toml::de::Error) -> String {
     // 1 + the newlines before the span (the span may start a line, or not be on a
     // char boundary, so count bytes rather than `lines()` of a slice)
     let line = e.span().map(|s| {
