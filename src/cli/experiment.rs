@@ -11,7 +11,8 @@
 //!
 //! [reference]
 //! image = "ref.exr"                 # an image, relative to this file, or
-//! spp = 4096                        # rendered once with these options and cached
+//! spp = 4096                        # rendered once with these options and cached, or
+//! constant = 1.0                    # a known answer (the furnace rooms)
 //! options = "--rr classic"
 //!
 //! [budgets]
@@ -56,6 +57,8 @@ struct ExperimentFile {
 struct ReferenceSpec {
     image: Option<String>,
     spp: Option<u32>,
+    /// A known answer: every pixel and channel has this value (the furnace rooms: 1).
+    constant: Option<f32>,
     #[serde(default)]
     options: String,
 }
@@ -182,6 +185,12 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
 
     // The reference: an image, or a cached render.
     let reference = match (&ex.reference.image, ex.reference.spp) {
+        (None, None) if ex.reference.constant.is_some() => {
+            let v = ex.reference.constant.unwrap_or(1.0);
+            let a = parse_render(&scene_spec, &common, &format!("{fname}: options"))?;
+            let (w, h) = a.res.or(scene.defaults.res).unwrap_or((256, 256));
+            RgbImage::new(w, h, vec![[v; 3]; (w * h) as usize])
+        }
         (Some(p), None) => read_image(&dir.join(p))?,
         (None, Some(spp)) => {
             let mut o = common.clone();
