@@ -128,6 +128,10 @@ pub struct DtfParams {
     pub sigma_floor: f32,
     /// Floor of ||C_d|| for allocation, as a share of the image's mean ||C_d||.
     pub norm_floor: f32,
+    /// Floor of sigma as a share of the pixel's own ||C_d||: all pixels share the n
+    /// dependent jitters and paths, so a pixel can miss a thin feature (a sliver of a light)
+    /// in every one of them and show sigma ~ 0; no Monte Carlo pixel is that certain.
+    pub relative_sigma_floor: f32,
     /// Budget mode: allocation weights sigma^2/||C_d|| are clipped at this multiple of their
     /// median (0: no clipping, the paper's raw proportionality).
     pub max_weight_ratio: f32,
@@ -148,6 +152,7 @@ impl Default for DtfParams {
             clamp: Clamp::ActiveSet,
             sigma_floor: 0.05,
             norm_floor: 0.05,
+            relative_sigma_floor: 0.0,
             max_weight_ratio: 16.0,
         }
     }
@@ -250,8 +255,14 @@ pub fn robust_stats(dep: &Film, params: &DtfParams) -> Vec<(f64, f64)> {
     let mean_norm = raw.iter().map(|r| r.1).sum::<f64>() / k;
     let sf = params.sigma_floor as f64 * mean_sigma;
     let cf = params.norm_floor as f64 * mean_norm;
+    let rel = params.relative_sigma_floor as f64;
     raw.into_iter()
-        .map(|(sg, c)| (sg.max(sf), if cf > 0.0 { c.max(cf) } else { c }))
+        .map(|(sg, c)| {
+            (
+                sg.max(sf).max(rel * c),
+                if cf > 0.0 { c.max(cf) } else { c },
+            )
+        })
         .collect()
 }
 
@@ -887,6 +898,7 @@ mod tests {
         let raw = DtfParams {
             sigma_floor: 0.0,
             norm_floor: 0.0,
+            relative_sigma_floor: 0.0,
             ..Default::default()
         };
         assert_eq!(allocate_relative(&f, &raw).unwrap(), vec![200, 0]);
@@ -906,6 +918,7 @@ mod tests {
         let params = DtfParams {
             sigma_floor: 0.0,
             norm_floor: 0.0,
+            relative_sigma_floor: 0.0,
             max_weight_ratio: 0.0,
             ..Default::default()
         };
