@@ -30,7 +30,8 @@ fn dtf_on_the_furnace_is_one() {
         .sum::<f64>()
         / (3 * img.data.len()) as f64)
         .sqrt();
-    assert!(rms < 0.08, "RMS deviation from 1 is {rms}");
+    // measured 0.037 (n = 16, 400 spp, 16x16)
+    assert!(rms < 0.05, "RMS deviation from 1 is {rms}");
 }
 
 #[test]

@@ -106,12 +106,6 @@ impl Bounds3 {
     }
 }
 
-/// Reflect `v` about the normal `n` (both pointing away from the surface).
-#[inline]
-pub fn reflect(v: Vec3, n: Vec3) -> Vec3 {
-    2.0 * v.dot(n) * n - v
-}
-
 /// Offset a ray origin along the geometric normal to avoid self-intersection,
 /// scaled with the magnitude of the position (pbrt-style, simplified).
 #[inline]
