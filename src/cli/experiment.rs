@@ -78,23 +78,24 @@ struct ConfigSpec {
     options: String,
 }
 
-/// One run of one configuration at one budget.
+/// One run of one configuration at one budget: the metrics (with the render's seconds and
+/// efficiency) plus what identifies the run.
 #[derive(Serialize, Clone, Debug)]
 pub struct ResultRow {
     pub config: String,
     pub budget: f64,
     pub budget_kind: &'static str,
     pub seed: u64,
-    pub seconds: f64,
     pub spp: u32,
     pub paths: u64,
-    pub mse: f64,
-    pub rmse: f64,
-    pub relmse: f64,
-    pub perceptual_count: u64,
-    pub perceptual_share: f64,
-    pub luminance_ratio: f64,
-    pub efficiency: f64,
+    #[serde(flatten)]
+    pub metrics: Metrics,
+}
+
+impl ResultRow {
+    fn seconds(&self) -> f64 {
+        self.metrics.seconds.unwrap_or(0.0)
+    }
 }
 
 #[derive(Parser)]
@@ -247,29 +248,23 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
                 ]);
                 let args = parse_render(&scene_spec, &o, &format!("{fname}: config {}", c.name))?;
                 let r = execute(&args, &scene)?;
-                let m = Metrics::compute(&r.image, &reference).map_err(|e| {
-                    format!("{fname}: config {}: against the reference: {e}", c.name)
-                })?;
+                let metrics = Metrics::compute(&r.image, &reference)
+                    .map_err(|e| format!("{fname}: config {}: against the reference: {e}", c.name))?
+                    .with_seconds(r.stats.seconds);
                 let row = ResultRow {
                     config: c.name.clone(),
                     budget: b,
                     budget_kind: kind,
                     seed: rep as u64,
-                    seconds: r.stats.seconds,
                     spp: r.stats.spp,
                     paths: r.stats.paths,
-                    mse: m.mse,
-                    rmse: m.rmse,
-                    relmse: m.relmse,
-                    perceptual_count: m.perceptual_count,
-                    perceptual_share: m.perceptual_share,
-                    luminance_ratio: m.luminance_ratio,
-                    efficiency: crate::metrics::efficiency(m.mse, r.stats.seconds),
+                    metrics,
                 };
+                let m = &row.metrics;
                 if !quiet {
                     eprintln!(
                         "kalos: {:<16} {kind} {b:<6} seed {rep}: {:.2} s, {} spp, rmse {:.5}, relmse {:.5}, perceptual {:.1}%",
-                        c.name, row.seconds, row.spp, row.rmse, row.relmse, row.perceptual_share * 100.0
+                        c.name, row.seconds(), row.spp, m.rmse, m.relmse, m.perceptual_share * 100.0
                     );
                 }
                 rows.push(row);
@@ -299,16 +294,16 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
             r.budget,
             r.budget_kind,
             r.seed,
-            r.seconds,
+            r.seconds(),
             r.spp,
             r.paths,
-            r.mse,
-            r.rmse,
-            r.relmse,
-            r.perceptual_count,
-            r.perceptual_share,
-            r.luminance_ratio,
-            r.efficiency
+            r.metrics.mse,
+            r.metrics.rmse,
+            r.metrics.relmse,
+            r.metrics.perceptual_count,
+            r.metrics.perceptual_share,
+            r.metrics.luminance_ratio,
+            r.metrics.efficiency.unwrap_or(0.0)
         );
     }
     let write = |name: &str, data: String| -> Result<(), String> {
@@ -350,25 +345,25 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
                 title: "RMSE".into(),
                 x_label: x_label.into(),
                 y_label: "RMSE".into(),
-                series: averaged(|r| r.rmse, x),
+                series: averaged(|r| r.metrics.rmse, x),
             },
             Panel {
                 title: "Perceptual error".into(),
                 x_label: x_label.into(),
                 y_label: "share of pixels with > 5% error".into(),
-                series: averaged(|r| r.perceptual_share, x),
+                series: averaged(|r| r.metrics.perceptual_share, x),
             },
             Panel {
                 title: "relMSE".into(),
                 x_label: x_label.into(),
                 y_label: "relMSE".into(),
-                series: averaged(|r| r.relmse, x),
+                series: averaged(|r| r.metrics.relmse, x),
             },
         ]
     };
     plot_panels(
         &out.join("error-vs-time"),
-        &panels(|r| r.seconds, "render time (s)"),
+        &panels(|r| r.seconds(), "render time (s)"),
     )?;
     if kind == "spp" {
         plot_panels(
