@@ -23,18 +23,14 @@ use std::time::Instant;
 
 const THREADS: usize = 2;
 
-struct Rng(u64);
+/// `SeqRng` with the helpers this file needs.
+struct Rng(kalos::sampling::SeqRng);
 impl Rng {
-    fn next_u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let x = (((old >> 18) ^ old) >> 27) as u32;
-        x.rotate_right((old >> 59) as u32)
+    fn new(seed: u64) -> Self {
+        Rng(kalos::sampling::SeqRng::new(seed))
     }
     fn f(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+        self.0.next_f32()
     }
     fn in_bounds(&mut self, b: &Bounds3) -> Vec3 {
         let u = Vec3::new(self.f(), self.f(), self.f());
@@ -75,7 +71,7 @@ fn sphere(tris: &mut Vec<[Vec3; 3]>, c: Vec3, radius: f32, nu: usize, nv: usize,
 
 fn make_mesh(target: usize) -> Vec<[Vec3; 3]> {
     let mut tris = Vec::with_capacity(target + 1024);
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     // Ground: ~5% of the triangles, slightly wavy.
     let g = ((target as f32 * 0.05 / 2.0).sqrt() as usize).max(1);
     let h = |x: f32, z: f32| 0.05 * (x * 3.0).sin() * (z * 2.0).cos();
@@ -191,7 +187,7 @@ struct Rays {
 }
 
 fn make_rays(b: &Bounds3, n: usize) -> Rays {
-    let mut rng = Rng(12345);
+    let mut rng = Rng::new(12345);
     let closest = (0..n)
         .map(|_| Ray::new(rng.in_bounds(b), rng.dir()))
         .collect();

@@ -1,18 +1,13 @@
 use super::*;
 
-/// Small deterministic RNG (PCG32) for the tests.
-struct Rng(u64);
+/// `SeqRng` with the helpers this file needs.
+struct Rng(crate::sampling::SeqRng);
 impl Rng {
-    fn next_u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let x = (((old >> 18) ^ old) >> 27) as u32;
-        x.rotate_right((old >> 59) as u32)
+    fn new(seed: u64) -> Self {
+        Rng(crate::sampling::SeqRng::new(seed))
     }
     fn f(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+        self.0.next_f32()
     }
     fn range(&mut self, a: f32, b: f32) -> f32 {
         a + (b - a) * self.f()
@@ -54,7 +49,7 @@ fn soup(rng: &mut Rng, n: usize, degenerate: bool) -> Vec<[Vec3; 3]> {
         let c = rng.v(-1.0, 1.0);
         let s = if rng.f() < 0.1 { 0.8 } else { 0.08 };
         let mut t = [c + rng.v(-s, s), c + rng.v(-s, s), c + rng.v(-s, s)];
-        match rng.next_u32() % 16 {
+        match rng.0.next_u32() % 16 {
             0 => {
                 // Axis-aligned (flat bounding box).
                 let z = t[0].z;
@@ -63,13 +58,13 @@ fn soup(rng: &mut Rng, n: usize, degenerate: bool) -> Vec<[Vec3; 3]> {
             }
             1 if !tris.is_empty() => {
                 // Exact duplicate of an earlier triangle.
-                t = tris[rng.next_u32() as usize % tris.len()];
+                t = tris[rng.0.next_u32() as usize % tris.len()];
             }
             2 if degenerate => t[1] = t[0],
             3 if degenerate => t[2] = t[0] + (t[1] - t[0]) * 2.0,
             4 if degenerate => t = [c, c, c],
-            5 if degenerate => t[rng.next_u32() as usize % 3].y = f32::NAN,
-            6 if degenerate => t[rng.next_u32() as usize % 3].x = f32::INFINITY,
+            5 if degenerate => t[rng.0.next_u32() as usize % 3].y = f32::NAN,
+            6 if degenerate => t[rng.0.next_u32() as usize % 3].x = f32::INFINITY,
             _ => {}
         }
         tris.push(t);
@@ -80,7 +75,7 @@ fn soup(rng: &mut Rng, n: usize, degenerate: bool) -> Vec<[Vec3; 3]> {
 fn random_ray(rng: &mut Rng) -> (Ray, f32) {
     let o = rng.v(-1.3, 1.3);
     let mut d = rng.v(-1.0, 1.0) * rng.range(0.1, 10.0);
-    match rng.next_u32() % 8 {
+    match rng.0.next_u32() % 8 {
         0 => d.x = 0.0,
         1 => {
             d.y = 0.0;
@@ -99,7 +94,7 @@ fn random_ray(rng: &mut Rng) -> (Ray, f32) {
 fn check_against_brute(tris: &[[Vec3; 3]], rays: usize, seed: u64) -> (usize, usize) {
     let bvh = Bvh::build(tris);
     check_structure(&bvh, tris);
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut hits = 0;
     let mut ties = 0;
     for _ in 0..rays {
@@ -201,7 +196,7 @@ fn check_structure(bvh: &Bvh, input: &[[Vec3; 3]]) {
 
 #[test]
 fn matches_brute_force_small_soup() {
-    let mut rng = Rng(1);
+    let mut rng = Rng::new(1);
     let tris = soup(&mut rng, 60, false);
     check_against_brute(&tris, 4000, 11);
 }
@@ -210,7 +205,7 @@ fn matches_brute_force_small_soup() {
 fn matches_brute_force_random_soups() {
     let mut total_hits = 0;
     for (seed, n) in [(2u64, 3000usize), (3, 1500), (4, 700)] {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let tris = soup(&mut rng, n, false);
         let (hits, _) = check_against_brute(&tris, 3000, seed * 7);
         total_hits += hits;
@@ -223,7 +218,7 @@ fn matches_brute_force_random_soups() {
 
 #[test]
 fn matches_brute_force_with_degenerates() {
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     let tris = soup(&mut rng, 2500, true);
     assert!(tris.iter().filter(|t| is_degenerate(t)).count() > 500);
     let (hits, _) = check_against_brute(&tris, 4000, 55);
@@ -233,7 +228,7 @@ fn matches_brute_force_with_degenerates() {
 #[test]
 fn matches_brute_force_large_parallel_build() {
     // Large enough that the builder takes its parallel path.
-    let mut rng = Rng(6);
+    let mut rng = Rng::new(6);
     let tris = soup(&mut rng, 40_000, true);
     check_against_brute(&tris, 500, 66);
 }

@@ -16,22 +16,8 @@ pub struct Chi2Result {
     pub pdf_integral: f64,
 }
 
-/// Deterministic uniform numbers for tests (xorshift64*).
-pub struct TestRng(u64);
-impl TestRng {
-    pub fn new(seed: u64) -> Self {
-        TestRng(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1)
-    }
-    pub fn next_f32(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32) * (1.0 / 16_777_216.0)
-    }
-    pub fn next_2d(&mut self) -> Vec2 {
-        Vec2::new(self.next_f32(), self.next_f32())
-    }
-}
+/// Deterministic uniform numbers for the tests.
+pub use super::rng::SeqRng as TestRng;
 
 /// Run the test with `n` samples; `sample(u_1d, u_2d)` returns a unit direction or None.
 pub fn chi2_sphere(

@@ -7,5 +7,5 @@ pub mod warp;
 #[cfg(test)]
 pub(crate) mod chi2;
 
-pub use rng::{SampleStream, SamplerConfig, SamplerKind};
+pub use rng::{SampleStream, SamplerConfig, SamplerKind, SeqRng};
 pub use warp::*;

@@ -129,6 +129,34 @@ impl SampleStream {
 
 pub const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 
+/// A small sequential generator (PCG32) for tests, benchmarks and tools. Never for
+/// rendering: a render's numbers are pure functions of their coordinates (`SampleStream`).
+#[derive(Clone, Debug)]
+pub struct SeqRng(u64);
+
+impl SeqRng {
+    /// The seed is the generator's initial state.
+    pub fn new(seed: u64) -> Self {
+        SeqRng(seed)
+    }
+    pub fn next_u32(&mut self) -> u32 {
+        let old = self.0;
+        self.0 = old
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let x = (((old >> 18) ^ old) >> 27) as u32;
+        x.rotate_right((old >> 59) as u32)
+    }
+    /// Uniform in [0, 1), 24 bits.
+    pub fn next_f32(&mut self) -> f32 {
+        to_unit(self.next_u32())
+    }
+    pub fn next_2d(&mut self) -> glam::Vec2 {
+        let a = self.next_f32();
+        glam::Vec2::new(a, self.next_f32())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
