@@ -11,7 +11,8 @@
 //!
 //! [reference]
 //! image = "ref.exr"                 # an image, relative to this file, or
-//! spp = 4096                        # rendered once with these options and cached, or
+//! spp = 4096                        # rendered once with these options and cached (seed
+//!                                   # 2718281828 unless given, apart from the runs'), or
 //! constant = 1.0                    # a known answer (the furnace rooms)
 //! options = "--rr classic"
 //!
@@ -34,6 +35,9 @@ use crate::report::{crop, plot_panels, side_by_side, Panel, Series};
 use clap::Parser;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+/// Seed of a reference rendered by the experiment: far from the runs' seeds 0..repeats.
+const REFERENCE_SEED: &str = "2718281828";
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -196,6 +200,12 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
         (None, Some(spp)) => {
             let mut o = common.clone();
             o.extend(words(&ex.reference.options));
+            // The runs use seeds 0, 1, ...: a reference from the same seed would share its
+            // first samples with them (plain path tracing's first spp samples would be the
+            // reference's own) and flatter their error.
+            if !o.iter().any(|w| *w == "--seed" || w.starts_with("--seed=")) {
+                o.extend(["--seed", REFERENCE_SEED]);
+            }
             let spp_s = spp.to_string();
             o.extend(["--spp", spp_s.as_str(), "-q"]);
             let key = format!("{scene_spec} {}", o.join(" "));
