@@ -112,10 +112,22 @@ pub struct RenderArgs {
     /// Cornell 32x32 RMSE from 0.0118 to 0.0090 in one run; not yet the default).
     #[arg(long, default_value_t = 0.0)]
     pub dtf_rel_floor: f32,
-    /// DTF budget mode: clip the allocation weights sigma^2/||C_d|| at this multiple of their
-    /// median (0 = no clipping).
+    /// DTF budget mode: clip the allocation weights at this multiple of their median (0 = no
+    /// clipping).
     #[arg(long, default_value_t = 16.0)]
     pub dtf_max_ratio: f32,
+    /// DTF budget mode: share of the budget per pixel: mse (N ∝ sigma, least squared
+    /// error), paper (N ∝ sigma^2/||C_d||, the paper's) or relmse (N ∝ sigma/||C_d||).
+    #[arg(long, default_value = "mse", value_parser = ["mse", "paper", "relmse"])]
+    pub dtf_alloc: String,
+    /// DTF: a region stops growing at a neighbour whose N exceeds this multiple of the
+    /// pixel's own (1 = the paper's rule "N[p] < N[q]"; 2.5 tolerates one category step).
+    #[arg(long, default_value_t = 2.5)]
+    pub dtf_stop_ratio: f32,
+    /// DTF with --dtf-eps: rounds of top-up samples for pixels whose samples so far (both
+    /// phases) show they miss eps_r (0 = the paper's single allocation).
+    #[arg(long, default_value_t = 2)]
+    pub dtf_rounds: u32,
     /// DTF: write the intermediate images beside the output (dependent, independent,
     /// filtered, combined, N and M maps).
     #[arg(long)]
@@ -125,7 +137,7 @@ pub struct RenderArgs {
 impl RenderArgs {
     /// The DTF parameters these options give.
     pub fn dtf_params(&self) -> crate::filter::dtf::DtfParams {
-        use crate::filter::dtf::{Clamp, DtfParams, Kernel};
+        use crate::filter::dtf::{Allocation, Clamp, DtfParams, Kernel};
         let d = DtfParams::default();
         DtfParams {
             n: self.dtf_n,
@@ -147,6 +159,13 @@ impl RenderArgs {
             norm_floor: self.dtf_floor,
             relative_sigma_floor: self.dtf_rel_floor,
             max_weight_ratio: self.dtf_max_ratio,
+            allocation: match self.dtf_alloc.as_str() {
+                "paper" => Allocation::Paper,
+                "relmse" => Allocation::RelMse,
+                _ => Allocation::Mse,
+            },
+            stop_ratio: self.dtf_stop_ratio,
+            top_up_rounds: self.dtf_rounds,
         }
     }
 }

@@ -12,7 +12,9 @@
 
 use super::render::{render_into, Counts, RenderSettings};
 use crate::film::Film;
-use crate::filter::dtf::{allocate_budget, allocate_relative, dtf_filter, DtfOutput, DtfParams};
+use crate::filter::dtf::{
+    allocate_budget, allocate_relative, dtf_filter, top_up, DtfOutput, DtfParams,
+};
 use crate::integrator::Counters;
 use crate::scene::Scene;
 use indicatif::ProgressBar;
@@ -116,6 +118,33 @@ pub fn render_dtf(
         progress,
     );
     counters.add(&c2);
+
+    // Relative-error mode: top-up rounds from the statistics of all samples so far (see
+    // `filter::dtf::top_up`); each round on its own stream. N[p] then counts them too.
+    let mut alloc = alloc;
+    if budget == DtfBudget::RelativeError {
+        for round in 0..params.top_up_rounds {
+            let mut all = dependent.clone();
+            all.merge(&independent);
+            let extra = top_up(&all, params)?;
+            if extra.iter().all(|&e| e == 0) {
+                break;
+            }
+            let mut more = Film::new(set.width, set.height)?;
+            let c = render_into(
+                scene,
+                &ind_set,
+                &mut more,
+                Counts::PerPixel(&extra),
+                0,
+                2 + round,
+                progress,
+            );
+            counters.add(&c);
+            independent.merge(&more);
+            alloc.iter_mut().zip(&extra).for_each(|(a, &e)| *a += e);
+        }
+    }
     let phase2_seconds = t1.elapsed().as_secs_f64();
 
     // Region forming, filtering and display.
