@@ -144,6 +144,21 @@ pub fn run(cli: Cli) -> Result<(), String> {
                     i.bvh_nodes,
                     i.bvh_bytes as f64 / 1048576.0
                 );
+                let e = &s.radiance_estimate;
+                let l = e.l_tilde::<3>();
+                println!(
+                    "L~           [{:.4}, {:.4}, {:.4}] (estimate roulette; a~ [{:.3}, {:.3}, {:.3}], \
+                     S {:.4}, e_s {:.4}, e_L {:.4})",
+                    l[0],
+                    l[1],
+                    l[2],
+                    e.albedo[0],
+                    e.albedo[1],
+                    e.albedo[2],
+                    e.area,
+                    e.e_s,
+                    e.e_l
+                );
             }
             Ok(())
         }

@@ -513,16 +513,29 @@ pub fn selection_weight<const N: usize>(
     Some((weight, sp / s_sum))
 }
 
-/// The paper's estimate of the radiance arriving anywhere in a closed scene, reflected
-/// light only (direct light is left out: it varies too much to guess, and an
-/// overestimate costs more than an underestimate):
+/// The paper's estimate of the radiance arriving anywhere in a scene, reflected light only
+/// (direct light is left out: it varies too much to guess, and an overestimate costs more
+/// than an underestimate). For a closed scene the paper's
 ///
 ///   L~ = (1 / (pi S)) a~ Phi_e / (1 - a~)   per wavelength,
 ///
 /// from the emitted power Phi_e, the total area S and the area-weighted albedo a~: the
-/// power reflected once, twice, ... is Phi_e (a~ + a~^2 + ...). Computed once per scene
-/// (`Scene::radiance_estimate`) for every band count; a band with a~ >= 1 has no finite
-/// estimate and gets 0 (the classic roulette's guess).
+/// power reflected once, twice, ... is Phi_r = Phi_e (a~ + a~^2 + ...), and all of it
+/// arrives somewhere again.
+///
+/// Open scenes (`scene::escape`): a share e_L of the emitted photons escapes before its
+/// first hit and a share e_s of the reflected power escapes after each reflection, so
+///
+///   Phi_r = Phi_e (1 - e_L) (a~ + a~^2 (1 - e_s) + ...) = Phi_e (1 - e_L) a~ / (1 - a~ (1 - e_s)),
+///
+/// of which (1 - e_s) Phi_r arrives at the surfaces again (the rest leaves), and the
+/// average radiance arriving is
+///
+///   L~ = (1 / (pi S)) (1 - e_s) Phi_r.
+///
+/// With e_s = e_L = 0 it is the paper's formula. Computed once per scene
+/// (`Scene::radiance_estimate`) for every band count; a band with a~ (1 - e_s) >= 1 has no
+/// finite estimate and gets 0 (the classic roulette's guess).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RadianceEstimate {
     /// Phi_e per RGB channel.
@@ -531,39 +544,61 @@ pub struct RadianceEstimate {
     pub area: f64,
     /// a~ per RGB channel.
     pub albedo: [f64; 3],
+    /// e_s: the share of the reflected power that escapes after a reflection.
+    pub e_s: f64,
+    /// e_L: the share of the emitted power that escapes before its first hit.
+    pub e_l: f64,
     l3: Spectrum<3>,
     l8: Spectrum<8>,
     l16: Spectrum<16>,
 }
 
 impl RadianceEstimate {
-    /// L~ on one band.
-    pub fn formula(phi_e: f64, area: f64, albedo: f64) -> f64 {
-        if area <= 0.0 || !(0.0..1.0).contains(&albedo) || phi_e <= 0.0 {
+    /// L~ on one band (e_s = e_L = 0: the paper's closed-scene formula).
+    pub fn formula(phi_e: f64, area: f64, albedo: f64, e_s: f64, e_l: f64) -> f64 {
+        // a~ (1 - e_s): the share of the power arriving at a surface that arrives at one
+        // again after the reflection.
+        let kept = albedo * (1.0 - e_s);
+        if area <= 0.0 || !(0.0..1.0).contains(&kept) || albedo < 0.0 || phi_e <= 0.0 {
             return 0.0;
         }
-        albedo * phi_e / ((1.0 - albedo) * std::f64::consts::PI * area)
+        // Phi_r = Phi_e (1 - e_L) a~ / (1 - a~ (1 - e_s))
+        let phi_r = phi_e * (1.0 - e_l) * albedo / (1.0 - kept);
+        (1.0 - e_s) * phi_r / (std::f64::consts::PI * area)
     }
 
-    pub fn new(phi_e: [f64; 3], area: f64, albedo: [f64; 3]) -> Self {
+    /// The estimate of a closed scene (e_s = e_L = 0).
+    pub fn closed(phi_e: [f64; 3], area: f64, albedo: [f64; 3]) -> Self {
+        Self::new(phi_e, area, albedo, 0.0, 0.0)
+    }
+
+    pub fn new(phi_e: [f64; 3], area: f64, albedo: [f64; 3], e_s: f64, e_l: f64) -> Self {
         RadianceEstimate {
             phi_e,
             area,
             albedo,
-            l3: Self::bands(phi_e, area, albedo),
-            l8: Self::bands(phi_e, area, albedo),
-            l16: Self::bands(phi_e, area, albedo),
+            e_s,
+            e_l,
+            l3: Self::bands(phi_e, area, albedo, e_s, e_l),
+            l8: Self::bands(phi_e, area, albedo, e_s, e_l),
+            l16: Self::bands(phi_e, area, albedo, e_s, e_l),
         }
     }
 
     /// Phi_e and a~ are linear in the RGB inputs, so each band's comes from the uplift;
-    /// the formula is then applied per band.
-    fn bands<const N: usize>(phi_e: [f64; 3], area: f64, albedo: [f64; 3]) -> Spectrum<N> {
+    /// the formula is then applied per band (e_s and e_L are grey: one walk of luminance).
+    fn bands<const N: usize>(
+        phi_e: [f64; 3],
+        area: f64,
+        albedo: [f64; 3],
+        e_s: f64,
+        e_l: f64,
+    ) -> Spectrum<N> {
         let p = Spectrum::<N>::from_rgb(phi_e.map(|v| v as f32));
         let a = Spectrum::<N>::from_rgb(albedo.map(|v| v as f32));
         let mut l = Spectrum::<N>::ZERO;
         for k in 0..N {
-            l[k] = Self::formula(p[k] as f64, area, a[k] as f64) as f32;
+            l[k] = Self::formula(p[k] as f64, area, a[k] as f64, e_s, e_l) as f32;
         }
         l
     }
@@ -575,7 +610,7 @@ impl RadianceEstimate {
             3 => &self.l3.0,
             8 => &self.l8.0,
             16 => &self.l16.0,
-            _ => return Self::bands(self.phi_e, self.area, self.albedo),
+            _ => return Self::bands(self.phi_e, self.area, self.albedo, self.e_s, self.e_l),
         };
         let mut s = Spectrum::<N>::ZERO;
         s.0.copy_from_slice(src);

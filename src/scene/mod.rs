@@ -4,6 +4,7 @@
 
 pub mod builtin;
 pub mod camera;
+pub mod escape;
 pub mod mtl;
 pub mod obj;
 pub mod texture;
@@ -211,7 +212,8 @@ impl Scene {
         let bvh = Bvh::build(&desc.positions);
         let bvh_seconds = t0.elapsed().as_secs_f64();
         let lights = Lights::new(&desc.positions, &desc.material, &materials);
-        let radiance_estimate = scene_radiance_estimate(&desc, &materials, &textures, &lights);
+        let radiance_estimate =
+            scene_radiance_estimate(&desc, &materials, &textures, &lights, &bvh);
         let bounds = desc.bounds();
         let camera = desc.camera.unwrap_or_else(|| default_camera(&bounds));
         let mut warnings = desc.warnings;
@@ -272,13 +274,15 @@ impl Scene {
     }
 }
 
-/// The estimate roulette's L~ from the scene's emitted power Phi_e, total area S and
-/// area-weighted albedo a~ (each material's albedo bound, textures by their mean texel).
+/// The estimate roulette's L~ from the scene's emitted power Phi_e, total area S,
+/// area-weighted albedo a~ (each material's albedo bound, textures by their mean texel)
+/// and how open the scene is: e_s and e_L from the photon walk of `escape`.
 fn scene_radiance_estimate(
     desc: &SceneDesc,
     materials: &[Material],
     textures: &[Texture],
     lights: &Lights,
+    bvh: &Bvh,
 ) -> RadianceEstimate {
     let albedo: Vec<[f64; 3]> = materials
         .iter()
@@ -300,7 +304,18 @@ fn scene_radiance_estimate(
         }
     }
     let mean = weighted.map(|w| if area > 0.0 { w / area } else { 0.0 });
-    RadianceEstimate::new(lights.total_power_rgb(), area, mean)
+    let tri_albedo: Vec<f32> = desc
+        .material
+        .iter()
+        .map(|&m| {
+            let a = albedo[m as usize].map(|v| v as f32);
+            crate::spectrum::Spectrum::<3>(a)
+                .luminance()
+                .clamp(0.0, 1.0)
+        })
+        .collect();
+    let e = escape::escape_probabilities(&desc.positions, bvh, lights, &tri_albedo);
+    RadianceEstimate::new(lights.total_power_rgb(), area, mean, e.e_s, e.e_l)
 }
 
 /// A camera on +z looking at the centre of the bounds, 45 degrees vertical.

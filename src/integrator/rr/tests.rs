@@ -195,13 +195,15 @@ fn luminance_weights_are_positive_on_every_band() {
 fn estimate_formula() {
     // L~ = a~ Phi_e / (pi S (1 - a~)): a~ = 1/2 and Phi_e = pi S give 1.
     let s = 24.0;
-    assert!((RadianceEstimate::formula(std::f64::consts::PI * s, s, 0.5) - 1.0).abs() < 1e-12);
+    assert!(
+        (RadianceEstimate::formula(std::f64::consts::PI * s, s, 0.5, 0.0, 0.0) - 1.0).abs() < 1e-12
+    );
     // no finite estimate for a~ >= 1, none without light
-    assert_eq!(RadianceEstimate::formula(10.0, s, 1.0), 0.0);
-    assert_eq!(RadianceEstimate::formula(0.0, s, 0.5), 0.0);
+    assert_eq!(RadianceEstimate::formula(10.0, s, 1.0, 0.0, 0.0), 0.0);
+    assert_eq!(RadianceEstimate::formula(0.0, s, 0.5, 0.0, 0.0), 0.0);
     // grey inputs: every band count gets the same L~
-    let e = RadianceEstimate::new([3.0; 3], 2.0, [0.25; 3]);
-    let want = RadianceEstimate::formula(3.0, 2.0, 0.25) as f32;
+    let e = RadianceEstimate::closed([3.0; 3], 2.0, [0.25; 3]);
+    let want = RadianceEstimate::formula(3.0, 2.0, 0.25, 0.0, 0.0) as f32;
     for v in e.l_tilde::<3>().0 {
         assert!((v - want).abs() < 1e-6);
     }
