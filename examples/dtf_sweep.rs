@@ -85,7 +85,7 @@ fn main() {
     // unfiltered combination
     let mut p = p0.clone();
     p.m_max = 1;
-    let o = dtf_filter(&run.dependent, &run.independent, &run.alloc, &p).unwrap();
+    let o = dtf_filter(&run.dependent, &run.independent, &run.classes, &p).unwrap();
     report("no filter (mmax 1)", &o.combined, &reference, Some(base));
     let mut hist = [0usize; 33];
     for &m in &run.out.m {
@@ -93,7 +93,7 @@ fn main() {
     }
     println!("m histogram (default): {:?}", &hist[..=p0.m_max as usize]);
     {
-        let d = kalos::filter::dtf::Dtf::new(&run.dependent, &run.independent, &run.alloc, &p0)
+        let d = kalos::filter::dtf::Dtf::new(&run.dependent, &run.independent, &run.classes, &p0)
             .unwrap();
         let (w, h) = (reference.width, reference.height);
         let mut meff = vec![0.0f64; (w * h) as usize];
@@ -164,7 +164,7 @@ fn main() {
     ] {
         let mut p = p0.clone();
         f(&mut p);
-        let o = dtf_filter(&run.dependent, &run.independent, &run.alloc, &p).unwrap();
+        let o = dtf_filter(&run.dependent, &run.independent, &run.classes, &p).unwrap();
         report(name, &o.combined, &reference, Some(base));
     }
 }

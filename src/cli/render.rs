@@ -124,10 +124,14 @@ pub struct RenderArgs {
     /// pixel's own (1 = the paper's rule "N[p] < N[q]"; 2.5 tolerates one category step).
     #[arg(long, default_value_t = 2.5)]
     pub dtf_stop_ratio: f32,
-    /// DTF with --dtf-eps: rounds of top-up samples for pixels whose samples so far (both
-    /// phases) show they miss eps_r (0 = the paper's single allocation).
+    /// DTF: top-up rounds from the statistics of all samples so far (both phases): with
+    /// --dtf-eps for pixels that miss eps_r; with --spp/--time one round that shares
+    /// --dtf-topup of phase 2's budget again (0 = the paper's single allocation).
     #[arg(long, default_value_t = 2)]
     pub dtf_rounds: u32,
+    /// DTF budget modes: share of phase 2's samples held back for the top-up round.
+    #[arg(long, default_value_t = 0.25)]
+    pub dtf_topup: f32,
     /// DTF: write the intermediate images beside the output (dependent, independent,
     /// filtered, combined, N and M maps).
     #[arg(long)]
@@ -166,6 +170,7 @@ impl RenderArgs {
             },
             stop_ratio: self.dtf_stop_ratio,
             top_up_rounds: self.dtf_rounds,
+            top_up_share: self.dtf_topup,
         }
     }
 }

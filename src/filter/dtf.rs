@@ -169,6 +169,9 @@ pub struct DtfParams {
     /// Relative-error mode: rounds of top-up samples after phase 2 ([`top_up`]; 0: the
     /// paper's single allocation).
     pub top_up_rounds: u32,
+    /// Budget modes: share of phase 2's samples held back for one top-up round
+    /// ([`top_up_budget`]; used when `top_up_rounds` > 0).
+    pub top_up_share: f32,
     /// Region forming stops when a neighbour's N exceeds this multiple of the pixel's own
     /// N. The paper stops at any larger N (ratio 1). But sigma^2 from n samples has a
     /// relative standard error of about sqrt(2 / (n - 1)) (37% at n = 16, 20% at n = 50), so
@@ -198,6 +201,7 @@ impl Default for DtfParams {
             allocation: Allocation::Mse,
             stop_ratio: 2.5,
             top_up_rounds: 2,
+            top_up_share: 0.25,
         }
     }
 }
@@ -236,6 +240,12 @@ impl DtfParams {
             return Err(format!(
                 "dtf: stop ratio = {}: must be a number >= 1 (1 is the paper's rule)",
                 self.stop_ratio
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.top_up_share) {
+            return Err(format!(
+                "dtf: top-up share = {}: must be between 0 and 1",
+                self.top_up_share
             ));
         }
         if !self.df0_min.is_finite() {
@@ -387,6 +397,106 @@ pub fn top_up(total: &Film, params: &DtfParams) -> Result<Vec<u32>, String> {
         .collect())
 }
 
+/// Budget-mode top-up (a departure from the paper, like [`top_up`]): share `extra_spp`
+/// samples per pixel on average among the pixels again, from the statistics of all samples
+/// so far (`total`: dependent + independent), so that each pixel's total approaches
+/// s w[p] (w from `params.allocation`, clipped as in [`allocate_budget`]): extra[p] =
+/// max(classify(s w[p]) - have[p], 0), with s the largest scale whose extras fit the budget
+/// (bisection). A pixel whose n shared jitters all missed an edge shows its true sigma in
+/// its independent samples and gets its share here.
+pub fn top_up_budget(
+    total: &Film,
+    have: &[u32],
+    params: &DtfParams,
+    extra_spp: f64,
+) -> Result<Vec<u32>, String> {
+    params.validate()?;
+    if have.len() != total.pixels.len() {
+        return Err(format!(
+            "dtf: {} sample counts for {} pixels",
+            have.len(),
+            total.pixels.len()
+        ));
+    }
+    let cats = &params.categories[..];
+    let w = budget_weights(total, params);
+    let budget = (extra_spp.max(0.0) * w.len() as f64).round() as u64;
+    let extra = |s: f64| -> Vec<u32> {
+        w.par_iter()
+            .zip(have.par_iter())
+            .map(|(&wp, &h)| {
+                let c = if wp > 0.0 && wp.is_finite() {
+                    classify(s * wp, cats)
+                } else {
+                    0
+                };
+                c.saturating_sub(h)
+            })
+            .collect()
+    };
+    let spent = |e: &[u32]| -> u64 { e.iter().map(|&v| v as u64).sum() };
+    let finite_sum: f64 = w.iter().filter(|x| x.is_finite()).sum();
+    if budget == 0 || finite_sum <= 0.0 {
+        return Ok(vec![0; have.len()]);
+    }
+    // Bracket and bisect the scale (in log scale) to the last s with extras <= budget.
+    let (mut lo, mut hi) = (0.0f64, (budget as f64 / finite_sum).max(f64::MIN_POSITIVE));
+    let mut k = 0;
+    while spent(&extra(hi)) <= budget {
+        lo = hi;
+        hi *= 2.0;
+        k += 1;
+        if k > 2100 || !hi.is_finite() {
+            return Ok(extra(lo));
+        }
+    }
+    for _ in 0..100 {
+        let mid = if lo > 0.0 { (lo * hi).sqrt() } else { 0.5 * hi };
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if spent(&extra(mid)) <= budget {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(extra(lo))
+}
+
+/// Budget weights w[p] ([`Allocation`]) from a film's statistics, with the floors of
+/// [`robust_stats`] and clipped at `max_weight_ratio` times their median: 0 where sigma = 0,
+/// infinity for black pixels with sigma > 0.
+fn budget_weights(film: &Film, params: &DtfParams) -> Vec<f64> {
+    let mut w: Vec<f64> = robust_stats(film, params)
+        .into_iter()
+        .map(|(sg, c)| {
+            if sg <= 0.0 {
+                0.0
+            } else if c > 0.0 {
+                params.allocation.weight(sg, c)
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect();
+    // sigma^2/||C_d|| from n samples is heavy-tailed (one firefly in the dependent phase
+    // makes one pixel swallow the budget): clip w at `max_weight_ratio` times its median,
+    // which the tail cannot move, and keep the proportionality below that.
+    if params.max_weight_ratio > 0.0 {
+        let mut sorted: Vec<f64> = w.iter().copied().filter(|x| x.is_finite()).collect();
+        if !sorted.is_empty() {
+            let mid = sorted.len() / 2;
+            let (_, med, _) = sorted.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+            let cap = *med * params.max_weight_ratio as f64;
+            if cap > 0.0 {
+                w.iter_mut().for_each(|x| *x = x.min(cap));
+            }
+        }
+    }
+    w
+}
+
 /// Allocation mode (b), a budget of B = round(spp_avg * pixels) independent samples in
 /// total (phase 2 only; the n dependent samples are not counted).
 ///
@@ -411,34 +521,9 @@ pub fn allocate_budget(dep: &Film, params: &DtfParams, spp_avg: f64) -> Result<V
         ));
     }
     let cats = &params.categories[..];
-    let mut w: Vec<f64> = robust_stats(dep, params)
-        .into_iter()
-        .map(|(sg, c)| {
-            if sg <= 0.0 {
-                0.0
-            } else if c > 0.0 {
-                params.allocation.weight(sg, c)
-            } else {
-                f64::INFINITY
-            }
-        })
-        .collect();
+    let mut w = budget_weights(dep, params);
     if !w.iter().any(|&x| x > 0.0 && x.is_finite()) {
         w.iter_mut().for_each(|x| *x = 1.0);
-    }
-    // sigma^2/||C_d|| from n samples is heavy-tailed (one firefly in the dependent phase
-    // makes one pixel swallow the budget): clip w at `max_weight_ratio` times its median,
-    // which the tail cannot move, and keep the paper's proportionality below that.
-    if params.max_weight_ratio > 0.0 {
-        let mut sorted: Vec<f64> = w.iter().copied().filter(|x| x.is_finite()).collect();
-        if !sorted.is_empty() {
-            let mid = sorted.len() / 2;
-            let (_, med, _) = sorted.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
-            let cap = *med * params.max_weight_ratio as f64;
-            if cap > 0.0 {
-                w.iter_mut().for_each(|x| *x = x.min(cap));
-            }
-        }
     }
     let budget = (spp_avg * w.len() as f64).round() as u64;
 

@@ -13,7 +13,7 @@
 use super::render::{render_into, Counts, RenderSettings};
 use crate::film::Film;
 use crate::filter::dtf::{
-    allocate_budget, allocate_relative, dtf_filter, top_up, DtfOutput, DtfParams,
+    allocate_budget, allocate_relative, dtf_filter, top_up, top_up_budget, DtfOutput, DtfParams,
 };
 use crate::integrator::Counters;
 use crate::scene::Scene;
@@ -35,8 +35,11 @@ pub enum DtfBudget {
 pub struct DtfRun {
     pub dependent: Film,
     pub independent: Film,
-    /// N[p] as allocated.
+    /// N[p]: the independent samples each pixel got (allocation plus top-ups).
     pub alloc: Vec<u32>,
+    /// N[p] classes of the first allocation (from phase 1 alone): what region forming
+    /// compares between neighbours.
+    pub classes: Vec<u32>,
     pub out: DtfOutput,
     pub counters: Counters,
     pub phase1_seconds: f64,
@@ -82,9 +85,16 @@ pub fn render_dtf(
     );
     let phase1_seconds = t0.elapsed().as_secs_f64();
 
-    // Sample allocation N[p].
-    let alloc = match budget {
-        DtfBudget::RelativeError => allocate_relative(&dependent, params)?,
+    // Sample allocation N[p]. In the budget modes with top-up, phase 2 first spends
+    // (1 - top_up_share) of its samples, then the rest is shared again from all samples so
+    // far (`filter::dtf::top_up_budget`).
+    let share = if params.top_up_rounds > 0 {
+        params.top_up_share.clamp(0.0, 1.0) as f64
+    } else {
+        0.0
+    };
+    let (alloc, rest_spp) = match budget {
+        DtfBudget::RelativeError => (allocate_relative(&dependent, params)?, 0.0),
         DtfBudget::Spp(total) => {
             let rest = total - params.n as f64;
             if rest < 0.0 {
@@ -93,13 +103,20 @@ pub fn render_dtf(
                     params.n
                 ));
             }
-            allocate_budget(&dependent, params, rest)?
+            (
+                allocate_budget(&dependent, params, rest * (1.0 - share))?,
+                rest,
+            )
         }
         DtfBudget::Time(secs) => {
             // samples per second measured in phase 1; keep ~2% of the budget for the filter
             let rate = (params.n as f64 * pixels as f64) / phase1_seconds.max(1e-9);
             let left = (secs * 0.98 - phase1_seconds).max(0.0);
-            allocate_budget(&dependent, params, rate * left / pixels as f64)?
+            let rest = rate * left / pixels as f64;
+            (
+                allocate_budget(&dependent, params, rest * (1.0 - share))?,
+                rest,
+            )
         }
     };
 
@@ -119,36 +136,61 @@ pub fn render_dtf(
     );
     counters.add(&c2);
 
-    // Relative-error mode: top-up rounds from the statistics of all samples so far (see
-    // `filter::dtf::top_up`); each round on its own stream. N[p] then counts them too.
+    // Top-up rounds from the statistics of all samples so far (`filter::dtf::top_up` for
+    // eps_r, `top_up_budget` for a budget: one round with what is left); each round on its
+    // own stream. N[p] then counts them too.
+    // The classes of phase 1 stay the filter's N[p] for the stop rule (the paper's
+    // similarity of neighbours); `alloc` counts the top-ups too.
+    let classes = alloc.clone();
     let mut alloc = alloc;
-    if budget == DtfBudget::RelativeError {
-        for round in 0..params.top_up_rounds {
-            let mut all = dependent.clone();
-            all.merge(&independent);
-            let extra = top_up(&all, params)?;
-            if extra.iter().all(|&e| e == 0) {
-                break;
+    let rounds = match budget {
+        DtfBudget::RelativeError => params.top_up_rounds,
+        _ if share > 0.0 => 1,
+        _ => 0,
+    };
+    for round in 0..rounds {
+        let mut all = dependent.clone();
+        all.merge(&independent);
+        let extra = match budget {
+            DtfBudget::RelativeError => top_up(&all, params)?,
+            DtfBudget::Spp(_) => {
+                let spent = alloc.iter().map(|&a| a as f64).sum::<f64>() / pixels as f64;
+                top_up_budget(&all, &alloc, params, rest_spp - spent)?
             }
-            let mut more = Film::new(set.width, set.height)?;
-            let c = render_into(
-                scene,
-                &ind_set,
-                &mut more,
-                Counts::PerPixel(&extra),
-                0,
-                2 + round,
-                progress,
-            );
-            counters.add(&c);
-            independent.merge(&more);
-            alloc.iter_mut().zip(&extra).for_each(|(a, &e)| *a += e);
+            DtfBudget::Time(secs) => {
+                // the rate of phase 2 so far, for the time that is left
+                let done = alloc.iter().map(|&a| a as f64).sum::<f64>();
+                let el = t1.elapsed().as_secs_f64();
+                let left = (secs * 0.98 - t0.elapsed().as_secs_f64()).max(0.0);
+                let extra_spp = if el > 0.0 {
+                    done / el * left / pixels as f64
+                } else {
+                    0.0
+                };
+                top_up_budget(&all, &alloc, params, extra_spp)?
+            }
+        };
+        if extra.iter().all(|&e| e == 0) {
+            break;
         }
+        let mut more = Film::new(set.width, set.height)?;
+        let c = render_into(
+            scene,
+            &ind_set,
+            &mut more,
+            Counts::PerPixel(&extra),
+            0,
+            2 + round,
+            progress,
+        );
+        counters.add(&c);
+        independent.merge(&more);
+        alloc.iter_mut().zip(&extra).for_each(|(a, &e)| *a += e);
     }
     let phase2_seconds = t1.elapsed().as_secs_f64();
 
     // Region forming, filtering and display.
-    let out = dtf_filter(&dependent, &independent, &alloc, params)?;
+    let out = dtf_filter(&dependent, &independent, &classes, params)?;
     if let Some(pb) = progress {
         pb.finish_and_clear();
     }
@@ -157,6 +199,7 @@ pub fn render_dtf(
         dependent,
         independent,
         alloc,
+        classes,
         out,
         counters,
         phase1_seconds,
