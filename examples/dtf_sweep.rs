@@ -157,6 +157,9 @@ fn main() {
         ("df0 0", |p| p.df0_min = 0.0),
         ("gaussian", |p| p.kernel = Kernel::Gaussian),
         ("paper clamp", |p| p.clamp = Clamp::Paper),
+        ("guard off", |p| p.guard = 0.0),
+        ("guard 2", |p| p.guard = 2.0),
+        ("guard 5", |p| p.guard = 5.0),
         ("mmax 6 df0 0.001", |p| {
             p.m_max = 6;
             p.df0_min = 0.001

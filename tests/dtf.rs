@@ -50,6 +50,9 @@ fn budget_mode_spends_the_budget() {
         (phase2 - 32.0).abs() / 32.0 < 0.05,
         "phase 2 averaged {phase2} spp instead of 32"
     );
+    // N[p] counts every independent sample, top-ups included
+    let n_sum: u64 = run.alloc.iter().map(|&n| n as u64).sum();
+    assert_eq!(n_sum, run.independent.total_samples());
     // and N varies across the image (the allocation is adaptive)
     let (lo, hi) = (
         run.alloc.iter().min().unwrap(),
@@ -87,4 +90,27 @@ fn dtf_error_keeps_falling_with_the_budget() {
     }
     // and by a real factor over the 16x larger budget
     assert!(errs[2] < 0.75 * errs[0], "{errs:?}");
+}
+
+#[test]
+fn per_pixel_ray_counts_add_up_to_the_render_counters() {
+    use kalos::film::Film;
+    use kalos::pipeline::{render_into_costed, Counts};
+    let scene = kalos::scene::load("cornell").unwrap();
+    let set = settings(&scene, 16, 16);
+    let mut film = Film::new(16, 16).unwrap();
+    let mut rays = vec![0u64; 256];
+    let c = render_into_costed(
+        &scene,
+        &set,
+        &mut film,
+        Counts::Uniform(4),
+        0,
+        0,
+        None,
+        Some(&mut rays),
+    );
+    assert_eq!(rays.iter().sum::<u64>(), c.rays);
+    // every pixel traced at least its 4 camera rays
+    assert!(rays.iter().all(|&r| r >= 4));
 }

@@ -6,7 +6,7 @@ cd "$(dirname "$0")/../.."
 K=target/release/kalos
 out=docs/results/eps-series
 mkdir -p $out
-$K render cornell --res 32x32 --spp 65536 -q -o $out/reference.exr
+$K render cornell --res 32x32 --spp 65536 --seed 2718281828 -q -o $out/reference.exr
 echo "eps_r,avg_spp,seconds,rmse,relmse,perceptual_share"
 for eps in 0.1 0.03 0.01; do
   $K render cornell --res 32x32 --method dtf --dtf-n 32 --dtf-eps $eps -q -o $out/dtf-$eps.exr --stats $out/dtf-$eps.json

@@ -120,10 +120,18 @@ pub struct RenderArgs {
     /// error), paper (N ∝ sigma^2/||C_d||, the paper's) or relmse (N ∝ sigma/||C_d||).
     #[arg(long, default_value = "mse", value_parser = ["mse", "paper", "relmse"])]
     pub dtf_alloc: String,
+    /// DTF budget mode: ignore the per-pixel sample cost (rays per sample, measured in
+    /// phase 1) in the mse/relmse allocations.
+    #[arg(long)]
+    pub dtf_no_cost: bool,
     /// DTF: a region stops growing at a neighbour whose N exceeds this multiple of the
     /// pixel's own (1 = the paper's rule "N[p] < N[q]"; 2.5 tolerates one category step).
     #[arg(long, default_value_t = 2.5)]
     pub dtf_stop_ratio: f32,
+    /// DTF: a neighbour's colour difference Delta_q is at least what phase 2 shows beyond
+    /// this many standard errors (0 = off: Delta from the dependent phase alone, as printed).
+    #[arg(long, default_value_t = 3.0)]
+    pub dtf_guard: f32,
     /// DTF: top-up rounds from the statistics of all samples so far (both phases): with
     /// --dtf-eps for pixels that miss eps_r; with --spp/--time one round that shares
     /// --dtf-topup of phase 2's budget again (0 = the paper's single allocation).
@@ -168,7 +176,9 @@ impl RenderArgs {
                 "relmse" => Allocation::RelMse,
                 _ => Allocation::Mse,
             },
+            cost_aware: !self.dtf_no_cost,
             stop_ratio: self.dtf_stop_ratio,
+            guard: self.dtf_guard,
             top_up_rounds: self.dtf_rounds,
             top_up_share: self.dtf_topup,
         }

@@ -166,6 +166,9 @@ pub struct DtfParams {
     pub max_weight_ratio: f32,
     /// Budget mode: how the budget is shared ([`Allocation`]).
     pub allocation: Allocation,
+    /// Budget mode: weigh the optimal rules by the pixels' sample costs measured in phase 1
+    /// (rays per sample), N ∝ sigma / sqrt(c): least error for the *time* spent.
+    pub cost_aware: bool,
     /// Relative-error mode: rounds of top-up samples after phase 2 ([`top_up`]; 0: the
     /// paper's single allocation).
     pub top_up_rounds: u32,
@@ -179,6 +182,9 @@ pub struct DtfParams {
     /// with ratio 1 about a quarter of the pixels of flat walls were never filtered. The
     /// default 2.5 tolerates one category step and still stops at real variance edges.
     pub stop_ratio: f32,
+    /// Independent guard: Delta_q is at least the difference of the independent means
+    /// beyond `guard` standard errors (0: off, the paper's Delta from C_d alone).
+    pub guard: f32,
 }
 
 impl Default for DtfParams {
@@ -199,7 +205,9 @@ impl Default for DtfParams {
             relative_sigma_floor: 0.0,
             max_weight_ratio: 16.0,
             allocation: Allocation::Mse,
+            cost_aware: true,
             stop_ratio: 2.5,
+            guard: 3.0,
             top_up_rounds: 2,
             top_up_share: 0.25,
         }
@@ -409,8 +417,10 @@ pub fn top_up_budget(
     have: &[u32],
     params: &DtfParams,
     extra_spp: f64,
+    cost: Option<&[f64]>,
 ) -> Result<Vec<u32>, String> {
     params.validate()?;
+    check_cost(cost, total)?;
     if have.len() != total.pixels.len() {
         return Err(format!(
             "dtf: {} sample counts for {} pixels",
@@ -419,7 +429,7 @@ pub fn top_up_budget(
         ));
     }
     let cats = &params.categories[..];
-    let w = budget_weights(total, params);
+    let w = budget_weights(total, params, cost);
     let budget = (extra_spp.max(0.0) * w.len() as f64).round() as u64;
     let extra = |s: f64| -> Vec<u32> {
         w.par_iter()
@@ -452,7 +462,7 @@ pub fn top_up_budget(
     }
     for _ in 0..100 {
         let mid = if lo > 0.0 { (lo * hi).sqrt() } else { 0.5 * hi };
-        if mid <= lo || mid >= hi {
+        if mid <= lo || mid >= hi || (lo > 0.0 && hi < lo * (1.0 + 1e-9)) {
             break;
         }
         if spent(&extra(mid)) <= budget {
@@ -464,17 +474,36 @@ pub fn top_up_budget(
     Ok(extra(lo))
 }
 
+fn check_cost(cost: Option<&[f64]>, film: &Film) -> Result<(), String> {
+    match cost {
+        Some(c) if c.len() != film.pixels.len() => Err(format!(
+            "dtf: {} sample costs for {} pixels",
+            c.len(),
+            film.pixels.len()
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Budget weights w[p] ([`Allocation`]) from a film's statistics, with the floors of
 /// [`robust_stats`] and clipped at `max_weight_ratio` times their median: 0 where sigma = 0,
-/// infinity for black pixels with sigma > 0.
-fn budget_weights(film: &Film, params: &DtfParams) -> Vec<f64> {
+/// infinity for black pixels with sigma > 0. With per-pixel sample costs c[p] (e.g. rays
+/// per sample) the optimal rules minimise the error for a given *time*: N ∝ sigma /
+/// sqrt(c) (Lagrange on sum_p sigma^2 / N[p] with sum_p c[p] N[p] fixed); the paper's rule
+/// ignores cost.
+fn budget_weights(film: &Film, params: &DtfParams, cost: Option<&[f64]>) -> Vec<f64> {
     let mut w: Vec<f64> = robust_stats(film, params)
         .into_iter()
-        .map(|(sg, c)| {
+        .enumerate()
+        .map(|(p, (sg, c))| {
             if sg <= 0.0 {
                 0.0
             } else if c > 0.0 {
-                params.allocation.weight(sg, c)
+                let w = params.allocation.weight(sg, c);
+                match (params.allocation, cost) {
+                    (Allocation::Paper, _) | (_, None) => w,
+                    (_, Some(k)) => w / k[p].max(1e-3).sqrt(),
+                }
             } else {
                 f64::INFINITY
             }
@@ -514,14 +543,25 @@ fn budget_weights(film: &Film, params: &DtfParams) -> Vec<f64> {
 /// - no pixel with a finite positive w (e.g. a noise-free image): w = 1 everywhere, i.e.
 ///   a uniform allocation close to spp_avg.
 pub fn allocate_budget(dep: &Film, params: &DtfParams, spp_avg: f64) -> Result<Vec<u32>, String> {
+    allocate_budget_costed(dep, params, spp_avg, None)
+}
+
+/// [`allocate_budget`] with per-pixel sample costs (see [`budget_weights`]).
+pub fn allocate_budget_costed(
+    dep: &Film,
+    params: &DtfParams,
+    spp_avg: f64,
+    cost: Option<&[f64]>,
+) -> Result<Vec<u32>, String> {
     params.validate()?;
+    check_cost(cost, dep)?;
     if !(spp_avg.is_finite() && spp_avg >= 0.0) {
         return Err(format!(
             "dtf: budget of {spp_avg} samples per pixel: must be a non-negative number"
         ));
     }
     let cats = &params.categories[..];
-    let mut w = budget_weights(dep, params);
+    let mut w = budget_weights(dep, params, cost);
     if !w.iter().any(|&x| x > 0.0 && x.is_finite()) {
         w.iter_mut().for_each(|x| *x = 1.0);
     }
@@ -561,11 +601,17 @@ pub fn allocate_budget(dep: &Film, params: &DtfParams, spp_avg: f64) -> Result<V
         } else {
             0.5 * s_hi
         };
-        if mid <= s_lo || mid >= s_hi {
+        // (A relative bracket of 1e-9 no longer moves a pixel between categories.)
+        if mid <= s_lo || mid >= s_hi || (s_lo > 0.0 && s_hi < s_lo * (1.0 + 1e-9)) {
             break;
         }
-        if total(mid) <= budget {
+        let t = total(mid);
+        if t <= budget {
             s_lo = mid;
+            if t == budget {
+                s_hi = mid;
+                break;
+            }
         } else {
             s_hi = mid;
         }
@@ -698,6 +744,8 @@ pub struct Dtf {
     ci: Vec<[f64; 3]>,
     /// Actual phase-2 count per pixel.
     n_ind: Vec<u32>,
+    /// Variance of C_i per channel (phase 2), for the independent guard.
+    ci_var: Vec<[f64; 3]>,
 }
 
 impl Dtf {
@@ -735,6 +783,17 @@ impl Dtf {
                 .map(|s| if s.n > 0 { s.mean } else { [0.0; 3] })
                 .collect(),
             n_ind: indep.pixels.iter().map(|s| s.n).collect(),
+            ci_var: indep
+                .pixels
+                .iter()
+                .map(|s| {
+                    if s.n > 1 {
+                        s.variance_of_mean()
+                    } else {
+                        [f64::INFINITY; 3]
+                    }
+                })
+                .collect(),
         })
     }
 
@@ -753,6 +812,24 @@ impl Dtf {
                 .map(|(&w, c)| ((c.idx % self.width) as u32, (c.idx / self.width) as u32, w))
                 .collect(),
         }
+    }
+
+    /// The independent guard (`DtfParams::guard`, k): the true colour difference of p and q
+    /// is at least sum_c (|C_i[p] - C_i[q]|_c - k SE_c)^+, SE_c from the phase-2 variances.
+    /// Phase 1 shares its jitters among all pixels, so a light's thin edge can be missed in
+    /// every pixel of a row alike: C_d then calls two rows homogeneous that phase 2 shows
+    /// are not (Cornell, the light's lower edge: 0.94 against 0.26, averaged to 0.63). As N
+    /// grows the SE vanishes and any real difference is seen, so the filter vanishes too.
+    #[inline]
+    fn guard_delta(&self, p: usize, q: usize) -> f64 {
+        let k = self.params.guard as f64;
+        if k <= 0.0 || self.n_ind[p] < 2 || self.n_ind[q] < 2 {
+            return 0.0;
+        }
+        let (a, b, va, vb) = (self.ci[p], self.ci[q], self.ci_var[p], self.ci_var[q]);
+        (0..3)
+            .map(|c| ((a[c] - b[c]).abs() - k * (va[c] + vb[c]).sqrt()).max(0.0))
+            .sum::<f64>()
     }
 
     /// d(q - p) for window side m.
@@ -826,7 +903,7 @@ impl Dtf {
                         continue;
                     }
                     // Delta_q = ||C_d[p] - C_d[q]||.
-                    let delta = diff_norm(cdp, self.cd[q]);
+                    let delta = diff_norm(cdp, self.cd[q]).max(self.guard_delta(p, q));
                     sum_delta += delta;
                     s.cand.push(Cand {
                         idx: q,
@@ -1387,6 +1464,31 @@ mod tests {
         // A pixel whose samples all agreed needs nothing.
         let f = film(1, 1, |_, _| px(grey(1.0), grey(0.0), 100));
         assert_eq!(top_up(&f, &params).unwrap(), vec![0]);
+    }
+
+    #[test]
+    fn cost_aware_allocation_follows_sigma_over_sqrt_cost() {
+        // Two equal pixels, the second's samples four times as costly: N ∝ sigma / sqrt(c)
+        // gives it half the samples (the paper's rule ignores the cost).
+        let f = film(2, 1, |_, _| px(grey(1.0), grey(0.5), 16));
+        let params = DtfParams {
+            categories: (0..=1000).collect(),
+            sigma_floor: 0.0,
+            norm_floor: 0.0,
+            ..Default::default()
+        };
+        let cost = [1.0, 4.0];
+        let a = allocate_budget_costed(&f, &params, 300.0, Some(&cost)).unwrap();
+        assert!((a[0] as f64 / a[1] as f64 - 2.0).abs() < 0.02, "{a:?}");
+        assert!((a[0] + a[1]) as i64 - 600 <= 1, "{a:?}");
+        let paper = DtfParams {
+            allocation: Allocation::Paper,
+            ..params.clone()
+        };
+        let a = allocate_budget_costed(&f, &paper, 300.0, Some(&cost)).unwrap();
+        assert_eq!(a[0], a[1]);
+        // A cost table of the wrong size is an error, not a panic.
+        assert!(allocate_budget_costed(&f, &params, 300.0, Some(&[1.0])).is_err());
     }
 
     #[test]

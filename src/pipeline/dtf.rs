@@ -10,10 +10,11 @@
 //! 4. region forming and the error-optimal filter, 5. display C = (C_d n + C_i,f N)/(n + N)
 //!    (both in `filter::dtf`, pure functions of the two films).
 
-use super::render::{render_into, Counts, RenderSettings};
+use super::render::{render_into, render_into_costed, Counts, RenderSettings};
 use crate::film::Film;
 use crate::filter::dtf::{
-    allocate_budget, allocate_relative, dtf_filter, top_up, top_up_budget, DtfOutput, DtfParams,
+    allocate_budget_costed, allocate_relative, dtf_filter, top_up, top_up_budget, DtfOutput,
+    DtfParams,
 };
 use crate::integrator::Counters;
 use crate::scene::Scene;
@@ -74,7 +75,8 @@ pub fn render_dtf(
     let mut dep_set = *set;
     dep_set.sampler.dependent = true;
     let mut dependent = Film::new(set.width, set.height)?;
-    let mut counters = render_into(
+    let mut rays = vec![0u64; pixels];
+    let mut counters = render_into_costed(
         scene,
         &dep_set,
         &mut dependent,
@@ -82,8 +84,22 @@ pub fn render_dtf(
         0,
         0,
         progress,
+        Some(&mut rays),
     );
     let phase1_seconds = t0.elapsed().as_secs_f64();
+    // c[p]: rays per sample in pixel p, relative to the image mean (cost-aware allocation).
+    let mean_rays = rays.iter().sum::<u64>() as f64 / pixels.max(1) as f64;
+    let cost_v: Vec<f64> = rays
+        .iter()
+        .map(|&r| {
+            if mean_rays > 0.0 {
+                r as f64 / mean_rays
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let cost = params.cost_aware.then_some(&cost_v[..]);
 
     // Sample allocation N[p]. In the budget modes with top-up, phase 2 first spends
     // (1 - top_up_share) of its samples, then the rest is shared again from all samples so
@@ -104,7 +120,7 @@ pub fn render_dtf(
                 ));
             }
             (
-                allocate_budget(&dependent, params, rest * (1.0 - share))?,
+                allocate_budget_costed(&dependent, params, rest * (1.0 - share), cost)?,
                 rest,
             )
         }
@@ -114,7 +130,7 @@ pub fn render_dtf(
             let left = (secs * 0.98 - phase1_seconds).max(0.0);
             let rest = rate * left / pixels as f64;
             (
-                allocate_budget(&dependent, params, rest * (1.0 - share))?,
+                allocate_budget_costed(&dependent, params, rest * (1.0 - share), cost)?,
                 rest,
             )
         }
@@ -155,7 +171,7 @@ pub fn render_dtf(
             DtfBudget::RelativeError => top_up(&all, params)?,
             DtfBudget::Spp(_) => {
                 let spent = alloc.iter().map(|&a| a as f64).sum::<f64>() / pixels as f64;
-                top_up_budget(&all, &alloc, params, rest_spp - spent)?
+                top_up_budget(&all, &alloc, params, rest_spp - spent, cost)?
             }
             DtfBudget::Time(secs) => {
                 // the rate of phase 2 so far, for the time that is left
@@ -167,7 +183,7 @@ pub fn render_dtf(
                 } else {
                     0.0
                 };
-                top_up_budget(&all, &alloc, params, extra_spp)?
+                top_up_budget(&all, &alloc, params, extra_spp, cost)?
             }
         };
         if extra.iter().all(|&e| e == 0) {

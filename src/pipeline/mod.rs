@@ -6,4 +6,6 @@ pub mod dtf;
 pub mod render;
 
 pub use dtf::{render_dtf, DtfBudget, DtfRun};
-pub use render::{render, render_into, Budget, Counts, RenderOutput, RenderSettings};
+pub use render::{
+    render, render_into, render_into_costed, Budget, Counts, RenderOutput, RenderSettings,
+};

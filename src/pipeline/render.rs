@@ -57,16 +57,22 @@ pub fn render_into(
     stream: u32,
     progress: Option<&ProgressBar>,
 ) -> Counters {
-    match set.spectral {
-        SpectralMode::Rgb => pass::<3>(scene, set, film, counts, first_index, stream, progress),
-        SpectralMode::Bands8 => pass::<8>(scene, set, film, counts, first_index, stream, progress),
-        SpectralMode::Bands16 => {
-            pass::<16>(scene, set, film, counts, first_index, stream, progress)
-        }
-    }
+    render_into_costed(
+        scene,
+        set,
+        film,
+        counts,
+        first_index,
+        stream,
+        progress,
+        None,
+    )
 }
 
-fn pass<const N: usize>(
+/// [`render_into`] that also adds each pixel's traced rays to `rays[pixel]` (the cost of
+/// its samples, for cost-aware sample allocation).
+#[allow(clippy::too_many_arguments)]
+pub fn render_into_costed(
     scene: &Scene,
     set: &RenderSettings,
     film: &mut Film,
@@ -74,18 +80,63 @@ fn pass<const N: usize>(
     first_index: u32,
     stream: u32,
     progress: Option<&ProgressBar>,
+    rays: Option<&mut [u64]>,
+) -> Counters {
+    let a = (
+        scene,
+        set,
+        film,
+        counts,
+        first_index,
+        stream,
+        progress,
+        rays,
+    );
+    match set.spectral {
+        SpectralMode::Rgb => pass::<3>(a),
+        SpectralMode::Bands8 => pass::<8>(a),
+        SpectralMode::Bands16 => pass::<16>(a),
+    }
+}
+
+type PassArgs<'a, 'b> = (
+    &'a Scene,
+    &'a RenderSettings,
+    &'a mut Film,
+    Counts<'b>,
+    u32,
+    u32,
+    Option<&'a ProgressBar>,
+    Option<&'a mut [u64]>,
+);
+
+fn pass<const N: usize>(
+    (scene, set, film, counts, first_index, stream, progress, rays): PassArgs,
 ) -> Counters {
     let cam = Camera::new(set.camera, set.width, set.height);
     let w = film.width as usize;
+    let mut no_rays = Vec::new();
+    let rays: &mut [u64] = match rays {
+        Some(r) => {
+            assert_eq!(r.len(), film.pixels.len());
+            r
+        }
+        None => {
+            no_rays.resize(film.pixels.len(), 0);
+            &mut no_rays
+        }
+    };
     let (counters, rejected) = film
         .pixels
         .par_chunks_mut(w)
+        .zip(rays.par_chunks_mut(w))
         .enumerate()
-        .map(|(y, row)| {
+        .map(|(y, (row, row_rays))| {
             let mut c = Counters::default();
             let mut rej = Rejections::default();
-            for (x, px) in row.iter_mut().enumerate() {
+            for (x, (px, px_rays)) in row.iter_mut().zip(row_rays.iter_mut()).enumerate() {
                 let pixel = y * w + x;
+                let rays_before = c.rays;
                 for k in 0..counts.get(pixel) {
                     let mut s =
                         SampleStream::new(&set.sampler, stream, pixel as u32, first_index + k);
@@ -104,6 +155,7 @@ fn pass<const N: usize>(
                         px.push(v);
                     }
                 }
+                *px_rays += c.rays - rays_before;
             }
             if let Some(pb) = progress {
                 pb.inc(1);
