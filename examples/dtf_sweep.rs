@@ -111,41 +111,28 @@ fn main() {
             "Meff = 1/sum f^2 histogram by powers of 2 [1,2) [2,4) ...: {:?}",
             hm
         );
-        // relative error of each part, split by perceptual failure
         let comb = &run.out.combined;
         let norm = |c: [f32; 3]| (c[0].abs() + c[1].abs() + c[2].abs()) as f64;
         let mean_n: f64 =
             reference.data.iter().map(|&c| norm(c)).sum::<f64>() / reference.data.len() as f64;
-        let mut buckets = [(0usize, 0usize); 8];
-        for i in 0..meff.len() {
-            let r = reference.data[i];
-            let dd = [
-                comb.data[i][0] - r[0],
-                comb.data[i][1] - r[1],
-                comb.data[i][2] - r[2],
-            ];
-            let bad = norm(dd) > 0.05 * norm(r).max(0.01 * mean_n);
-            let b = (meff[i].log2().floor().max(0.0) as usize).min(7);
-            buckets[b].0 += 1;
-            buckets[b].1 += bad as usize;
-        }
-        println!("per Meff bucket (pixels, bad): {:?}", buckets);
-        // plain per bucket
-        let pl = img(&plain.film);
-        let mut pb = [(0usize, 0usize); 8];
-        for i in 0..meff.len() {
-            let r = reference.data[i];
-            let dd = [
-                pl.data[i][0] - r[0],
-                pl.data[i][1] - r[1],
-                pl.data[i][2] - r[2],
-            ];
-            let bad = norm(dd) > 0.05 * norm(r).max(0.01 * mean_n);
-            let b = (meff[i].log2().floor().max(0.0) as usize).min(7);
-            pb[b].0 += 1;
-            pb[b].1 += bad as usize;
-        }
-        println!("plain per Meff bucket (pixels, bad): {:?}", pb);
+        // pixels per bucket of Meff, and how many of them are off by more than 5%
+        let buckets = |im: &RgbImage| {
+            let mut out = [(0usize, 0usize); 8];
+            for (i, m) in meff.iter().enumerate() {
+                let (x, r) = (im.data[i], reference.data[i]);
+                let bad = norm([x[0] - r[0], x[1] - r[1], x[2] - r[2]])
+                    > 0.05 * norm(r).max(0.01 * mean_n);
+                let b = (m.log2().floor().max(0.0) as usize).min(7);
+                out[b].0 += 1;
+                out[b].1 += bad as usize;
+            }
+            out
+        };
+        println!("per Meff bucket (pixels, bad): {:?}", buckets(comb));
+        println!(
+            "plain per Meff bucket (pixels, bad): {:?}",
+            buckets(&img(&plain.film))
+        );
     }
     for (name, f) in [
         (
@@ -158,6 +145,8 @@ fn main() {
         ("gaussian", |p| p.kernel = Kernel::Gaussian),
         ("paper clamp", |p| p.clamp = Clamp::Paper),
         ("guard off", |p| p.guard = 0.0),
+        ("stop 5", |p| p.stop_ratio = 5.0),
+        ("stop none", |p| p.stop_ratio = 1e9),
         ("guard 2", |p| p.guard = 2.0),
         ("guard 5", |p| p.guard = 5.0),
         ("mmax 6 df0 0.001", |p| {

@@ -107,10 +107,10 @@ pub struct RenderArgs {
     /// (0 = the paper's raw formula, which can starve pixels whose dependent samples agreed).
     #[arg(long, default_value_t = 0.05)]
     pub dtf_floor: f32,
-    /// DTF: floor of sigma as a share of the pixel's own ||C_d|| (0 = none): guards pixels
-    /// whose dependent samples all missed a thin feature (0.3 lowered the eps_r = 0.03
-    /// Cornell 32x32 RMSE from 0.0118 to 0.0090 in one run; not yet the default).
-    #[arg(long, default_value_t = 0.0)]
+    /// DTF with --dtf-eps: floor of sigma as a share of the pixel's own ||C_d|| (0 = none),
+    /// i.e. at least (3 F / eps_r)^2 samples per pixel: a pixel whose samples all agreed may
+    /// have missed a thin feature (a sliver of the light) in every one of them.
+    #[arg(long, default_value_t = 0.1)]
     pub dtf_rel_floor: f32,
     /// DTF budget mode: clip the allocation weights at this multiple of their median (0 = no
     /// clipping).
