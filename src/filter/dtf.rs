@@ -309,7 +309,9 @@ pub const N_HARD_MAX: u32 = 1 << 24;
 /// agree (sigma = 0) or were all black, the raw formula would give N = 0 for ever and keep
 /// the pixel at C_d however much is spent; with the floors every pixel's N grows without
 /// bound as eps_r -> 0 or the budget grows, so DTF stays asymptotically unbiased.
-pub fn robust_stats(dep: &Film, params: &DtfParams) -> Vec<(f64, f64)> {
+/// `relative_floor` (F) also floors sigma at F ||C_d|| (eps_r mode's
+/// `DtfParams::relative_sigma_floor`; budget weights pass 0).
+pub fn robust_stats(dep: &Film, params: &DtfParams, relative_floor: f32) -> Vec<(f64, f64)> {
     let raw: Vec<(f64, f64)> = dep
         .pixels
         .par_iter()
@@ -327,7 +329,7 @@ pub fn robust_stats(dep: &Film, params: &DtfParams) -> Vec<(f64, f64)> {
     let mean_norm = raw.iter().map(|r| r.1).sum::<f64>() / k;
     let sf = params.sigma_floor as f64 * mean_sigma;
     let cf = params.norm_floor as f64 * mean_norm;
-    let rel = params.relative_sigma_floor as f64;
+    let rel = relative_floor as f64;
     raw.into_iter()
         .map(|(sg, c)| {
             (
@@ -369,15 +371,7 @@ pub fn samples_for_error(sigma: f64, cd_norm: f64, n: u32, eps_r: f64, categorie
 /// Allocation mode (a), prescribed relative error `params.eps_r`: N[p] per pixel, row-major.
 /// n is each pixel's own sample count in the dependent film.
 pub fn allocate_relative(dep: &Film, params: &DtfParams) -> Result<Vec<u32>, String> {
-    params.validate()?;
-    let eps = params.eps_r as f64;
-    let stats = robust_stats(dep, params);
-    Ok(dep
-        .pixels
-        .par_iter()
-        .zip(stats.par_iter())
-        .map(|(s, &(sg, c))| samples_for_error(sg, c, s.n, eps, &params.categories))
-        .collect())
+    relative_counts(dep, params, false)
 }
 
 /// Top-up for the prescribed relative error (a departure from the paper, `top_up_rounds`):
@@ -391,22 +385,61 @@ pub fn allocate_relative(dep: &Film, params: &DtfParams) -> Result<Vec<u32>, Str
 /// needs. Without it the Cornell eps_r series stalled (RMSE 0.0118 at eps_r = 0.03, 0.0102
 /// at 0.01). Floors as in [`robust_stats`] (image means of the merged statistics).
 pub fn top_up(total: &Film, params: &DtfParams) -> Result<Vec<u32>, String> {
+    relative_counts(total, params, true)
+}
+
+/// [`samples_for_error`] for every pixel of `film` with its own sample count; with
+/// `zero_when_met`, 0 (not the smallest category) where eps_r is already reached.
+fn relative_counts(
+    film: &Film,
+    params: &DtfParams,
+    zero_when_met: bool,
+) -> Result<Vec<u32>, String> {
     params.validate()?;
     let eps = params.eps_r as f64;
-    let stats = robust_stats(total, params);
-    Ok(total
+    let stats = robust_stats(film, params, params.relative_sigma_floor);
+    Ok(film
         .pixels
         .par_iter()
         .zip(stats.par_iter())
         .map(|(s, &(sg, c))| {
             let want = samples_for_error_raw(sg, c, s.n, eps);
-            if want <= 0.0 {
+            if zero_when_met && want <= 0.0 {
                 0
             } else {
                 classify(want, &params.categories)
             }
         })
         .collect())
+}
+
+/// The scale bisection of the budget modes. T(s), the samples allocated at scale s, is a
+/// non-decreasing step function; returns (s_lo, s_hi) with T(s_lo) <= B < T(s_hi), the
+/// bracket narrowed in log scale until it is 1e-9 relative (no pixel changes category any
+/// more), starting from the guess `s0`. None: T(s) <= B for every finite s (B out of reach).
+fn bisect_scale(budget: u64, s0: f64, total: impl Fn(f64) -> u64) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (0.0f64, s0.max(f64::MIN_POSITIVE));
+    let mut doublings = 0;
+    while total(hi) <= budget {
+        lo = hi;
+        hi *= 2.0;
+        doublings += 1;
+        if doublings > 2100 || !hi.is_finite() {
+            return None;
+        }
+    }
+    for _ in 0..2200 {
+        let mid = if lo > 0.0 { (lo * hi).sqrt() } else { 0.5 * hi };
+        if mid <= lo || mid >= hi || (lo > 0.0 && hi < lo * (1.0 + 1e-9)) {
+            break;
+        }
+        if total(mid) <= budget {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some((lo, hi))
 }
 
 /// Budget-mode top-up (a departure from the paper, like [`top_up`]): share `extra_spp`
@@ -435,47 +468,33 @@ pub fn top_up_budget(
     let cats = &params.categories[..];
     let w = budget_weights(total, params, cost);
     let budget = (extra_spp.max(0.0) * w.len() as f64).round() as u64;
-    let extra = |s: f64| -> Vec<u32> {
-        w.par_iter()
-            .zip(have.par_iter())
-            .map(|(&wp, &h)| {
-                let c = if wp > 0.0 && wp.is_finite() {
-                    classify(s * wp, cats)
-                } else {
-                    0
-                };
-                c.saturating_sub(h)
-            })
-            .collect()
+    // extra[p] at scale s
+    let extra = |s: f64, wp: f64, h: u32| -> u32 {
+        if wp > 0.0 && wp.is_finite() {
+            classify(s * wp, cats).saturating_sub(h)
+        } else {
+            0
+        }
     };
-    let spent = |e: &[u32]| -> u64 { e.iter().map(|&v| v as u64).sum() };
     let finite_sum: f64 = w.iter().filter(|x| x.is_finite()).sum();
     if budget == 0 || finite_sum <= 0.0 {
         return Ok(vec![0; have.len()]);
     }
-    // Bracket and bisect the scale (in log scale) to the last s with extras <= budget.
-    let (mut lo, mut hi) = (0.0f64, (budget as f64 / finite_sum).max(f64::MIN_POSITIVE));
-    let mut k = 0;
-    while spent(&extra(hi)) <= budget {
-        lo = hi;
-        hi *= 2.0;
-        k += 1;
-        if k > 2100 || !hi.is_finite() {
-            return Ok(extra(lo));
-        }
-    }
-    for _ in 0..100 {
-        let mid = if lo > 0.0 { (lo * hi).sqrt() } else { 0.5 * hi };
-        if mid <= lo || mid >= hi || (lo > 0.0 && hi < lo * (1.0 + 1e-9)) {
-            break;
-        }
-        if spent(&extra(mid)) <= budget {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Ok(extra(lo))
+    // The largest scale whose extras fit the budget.
+    let spent_at = |s: f64| -> u64 {
+        w.par_iter()
+            .zip(have.par_iter())
+            .map(|(&wp, &h)| extra(s, wp, h) as u64)
+            .sum()
+    };
+    let s = match bisect_scale(budget, budget as f64 / finite_sum, spent_at) {
+        Some((lo, _)) => lo,
+        None => f64::INFINITY,
+    };
+    Ok(w.iter()
+        .zip(have)
+        .map(|(&wp, &h)| extra(s, wp, h))
+        .collect())
 }
 
 fn check_cost(cost: Option<&[f64]>, film: &Film) -> Result<(), String> {
@@ -498,11 +517,7 @@ fn check_cost(cost: Option<&[f64]>, film: &Film) -> Result<(), String> {
 fn budget_weights(film: &Film, params: &DtfParams, cost: Option<&[f64]>) -> Vec<f64> {
     // The relative sigma floor is a minimum count for eps_r; in a budget it would hand the
     // light's own pixels (bright, sigma ~ 0) a large share.
-    let params = &DtfParams {
-        relative_sigma_floor: 0.0,
-        ..params.clone()
-    };
-    let mut w: Vec<f64> = robust_stats(film, params)
+    let mut w: Vec<f64> = robust_stats(film, params, 0.0)
         .into_iter()
         .enumerate()
         .map(|(p, (sg, c))| {
@@ -542,8 +557,8 @@ fn budget_weights(film: &Film, params: &DtfParams, cost: Option<&[f64]>) -> Vec<
 /// N[p] proportional to w[p] (`params.allocation`; the paper's §3 w = sigma^2 / ||C_d||).
 /// Then N[p] = classify(s w[p])
 /// ([`classify`]: rounding up). The total T(s) is a non-decreasing step function of the
-/// scale s; we bisect s (in log scale, 200 steps) to the last s_lo with T <= B and the
-/// first s_hi with T >= B, then promote the pixels whose category differs between s_lo and
+/// scale s; we bisect s ([`bisect_scale`]) to the last s_lo with T <= B and the
+/// first s_hi with T > B, then promote the pixels whose category differs between s_lo and
 /// s_hi one by one, largest w first, as long as each promotion brings the total closer to
 /// B. The total then misses B by at most half of one category step of one pixel
 /// (typically far below 1% for real images), unless B is out of reach:
@@ -588,44 +603,15 @@ pub fn allocate_budget_costed(
     };
     let total = |s: f64| -> u64 { w.par_iter().map(|&wp| cat(s, wp) as u64).sum() };
 
-    // Bracket: T(s_lo) <= B <= T(s_hi).
+    // Bracket T(s_lo) <= B < T(s_hi); then promotions between the two (below).
+    if total(0.0) >= budget {
+        return Ok(w.iter().map(|&wp| cat(0.0, wp)).collect());
+    }
     let finite_sum: f64 = w.iter().filter(|x| x.is_finite()).sum();
-    let mut s_lo = 0.0;
-    if total(s_lo) >= budget {
-        return Ok(w.iter().map(|&wp| cat(s_lo, wp)).collect());
-    }
-    let mut s_hi = (budget as f64 / finite_sum).max(f64::MIN_POSITIVE);
-    let mut doublings = 0;
-    while total(s_hi) < budget {
-        s_lo = s_hi;
-        s_hi *= 2.0;
-        doublings += 1;
-        if doublings > 2100 || !s_hi.is_finite() {
-            // Out of reach: every pixel with w > 0 is at the largest category.
-            return Ok(w.iter().map(|&wp| cat(f64::INFINITY, wp)).collect());
-        }
-    }
-    for _ in 0..200 {
-        let mid = if s_lo > 0.0 {
-            (s_lo * s_hi).sqrt()
-        } else {
-            0.5 * s_hi
-        };
-        // (A relative bracket of 1e-9 no longer moves a pixel between categories.)
-        if mid <= s_lo || mid >= s_hi || (s_lo > 0.0 && s_hi < s_lo * (1.0 + 1e-9)) {
-            break;
-        }
-        let t = total(mid);
-        if t <= budget {
-            s_lo = mid;
-            if t == budget {
-                s_hi = mid;
-                break;
-            }
-        } else {
-            s_hi = mid;
-        }
-    }
+    let Some((s_lo, s_hi)) = bisect_scale(budget, budget as f64 / finite_sum, total) else {
+        // Out of reach: every pixel with w > 0 is at the largest category.
+        return Ok(w.iter().map(|&wp| cat(f64::INFINITY, wp)).collect());
+    };
     let mut alloc: Vec<u32> = w.iter().map(|&wp| cat(s_lo, wp)).collect();
     let mut spent: u64 = alloc.iter().map(|&a| a as u64).sum();
     let mut promote: Vec<(usize, u32)> = w
@@ -1528,8 +1514,38 @@ mod tests {
         // Without the guard, pixel (4, 2) averages in rows 3 and 4; with it, none of them.
         assert!(across(&build(0.0).weights(4, 2)) > 0.1);
         assert_eq!(across(&build(3.0).weights(4, 2)), 0.0);
-        // Within a row the guard still lets the filter work.
-        assert!(build(3.0).weights(4, 2).count() > 1);
+        // Within its own rows the guard still lets the filter work.
+        let r = build(3.0).weights(4, 2);
+        assert!(r.primary_weight() < 0.5, "f*[0] = {}", r.primary_weight());
+    }
+
+    #[test]
+    fn top_up_budget_fits_the_budget_and_follows_the_weights() {
+        // Three pixels with sigma 0.1, 0.2, 0.4 (grey 1), each already holding 10 samples;
+        // 60 more per pixel on average. Fine categories: the totals follow N ∝ sigma.
+        let f = film(3, 1, |x, _| px(grey(1.0), grey(0.1 * (1 << x) as f64), 50));
+        let params = DtfParams {
+            categories: (0..=1000).collect(),
+            sigma_floor: 0.0,
+            norm_floor: 0.0,
+            ..Default::default()
+        };
+        let have = [10, 10, 10];
+        let e = top_up_budget(&f, &have, &params, 60.0, None).unwrap();
+        let spent: u32 = e.iter().sum();
+        assert!((177..=180).contains(&spent), "{e:?}");
+        // totals (10 + e) in ratio 1 : 2 : 4 (to one sample)
+        let t: Vec<f64> = e.iter().map(|&v| (v + 10) as f64).collect();
+        assert!(
+            (t[1] / t[0] - 2.0).abs() < 0.1 && (t[2] / t[0] - 4.0).abs() < 0.1,
+            "{t:?}"
+        );
+        // a pixel that already holds more than its share gets nothing
+        let e = top_up_budget(&f, &[10, 10, 1000], &params, 30.0, None).unwrap();
+        assert_eq!(e[2], 0, "{e:?}");
+        assert!(e.iter().sum::<u32>() <= 90);
+        // wrong sizes are errors
+        assert!(top_up_budget(&f, &[1, 2], &params, 10.0, None).is_err());
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! samples are accumulated in index order by one thread, so the image is bit-identical
 //! for any thread count.
 
-use crate::film::{Film, Rejections};
+use crate::film::{Film, PixelStats, Rejections};
 use crate::integrator::{path, Counters, IntegratorKind, IntegratorSettings};
 use crate::sampling::{SampleStream, SamplerConfig};
 use crate::scene::{Camera, CameraDesc, Scene};
@@ -82,94 +82,85 @@ pub fn render_into_costed(
     progress: Option<&ProgressBar>,
     rays: Option<&mut [u64]>,
 ) -> Counters {
-    let a = (
+    let p = Pass {
         scene,
         set,
-        film,
         counts,
         first_index,
         stream,
         progress,
-        rays,
-    );
+    };
+    if let Some(r) = &rays {
+        assert_eq!(r.len(), film.pixels.len(), "one ray count per pixel");
+    }
     match set.spectral {
-        SpectralMode::Rgb => pass::<3>(a),
-        SpectralMode::Bands8 => pass::<8>(a),
-        SpectralMode::Bands16 => pass::<16>(a),
+        SpectralMode::Rgb => pass::<3>(&p, film, rays),
+        SpectralMode::Bands8 => pass::<8>(&p, film, rays),
+        SpectralMode::Bands16 => pass::<16>(&p, film, rays),
     }
 }
 
-type PassArgs<'a, 'b> = (
-    &'a Scene,
-    &'a RenderSettings,
-    &'a mut Film,
-    Counts<'b>,
-    u32,
-    u32,
-    Option<&'a ProgressBar>,
-    Option<&'a mut [u64]>,
-);
+/// What one pass reads: everything but the film it writes.
+struct Pass<'a> {
+    scene: &'a Scene,
+    set: &'a RenderSettings,
+    counts: Counts<'a>,
+    first_index: u32,
+    stream: u32,
+    progress: Option<&'a ProgressBar>,
+}
 
-fn pass<const N: usize>(
-    (scene, set, film, counts, first_index, stream, progress, rays): PassArgs,
-) -> Counters {
-    let cam = Camera::new(set.camera, set.width, set.height);
+fn pass<const N: usize>(p: &Pass, film: &mut Film, rays: Option<&mut [u64]>) -> Counters {
+    let cam = Camera::new(p.set.camera, p.set.width, p.set.height);
     let w = film.width as usize;
-    let mut no_rays = Vec::new();
-    let rays: &mut [u64] = match rays {
-        Some(r) => {
-            assert_eq!(r.len(), film.pixels.len());
-            r
-        }
-        None => {
-            no_rays.resize(film.pixels.len(), 0);
-            &mut no_rays
-        }
-    };
-    let (counters, rejected) = film
-        .pixels
-        .par_chunks_mut(w)
-        .zip(rays.par_chunks_mut(w))
-        .enumerate()
-        .map(|(y, (row, row_rays))| {
-            let mut c = Counters::default();
-            let mut rej = Rejections::default();
-            for (x, (px, px_rays)) in row.iter_mut().zip(row_rays.iter_mut()).enumerate() {
-                let pixel = y * w + x;
-                let rays_before = c.rays;
-                for k in 0..counts.get(pixel) {
-                    let mut s =
-                        SampleStream::new(&set.sampler, stream, pixel as u32, first_index + k);
-                    let v = match set.integrator.kind {
-                        IntegratorKind::Path => path::sample_pixel::<N>(
-                            scene,
-                            &cam,
-                            x as u32,
-                            y as u32,
-                            &mut s,
-                            &set.integrator,
-                            &mut c,
-                        ),
-                    };
-                    if rej.check(&v) {
-                        px.push(v);
-                    }
+    // One row: its samples into the film, and (if asked) each pixel's rays.
+    let row = |y: usize, row: &mut [PixelStats], mut row_rays: Option<&mut [u64]>| {
+        let mut c = Counters::default();
+        let mut rej = Rejections::default();
+        for (x, px) in row.iter_mut().enumerate() {
+            let pixel = y * w + x;
+            let rays_before = c.rays;
+            for k in 0..p.counts.get(pixel) {
+                let mut s =
+                    SampleStream::new(&p.set.sampler, p.stream, pixel as u32, p.first_index + k);
+                let v = match p.set.integrator.kind {
+                    IntegratorKind::Path => path::sample_pixel::<N>(
+                        p.scene,
+                        &cam,
+                        x as u32,
+                        y as u32,
+                        &mut s,
+                        &p.set.integrator,
+                        &mut c,
+                    ),
+                };
+                if rej.check(&v) {
+                    px.push(v);
                 }
-                *px_rays += c.rays - rays_before;
             }
-            if let Some(pb) = progress {
-                pb.inc(1);
+            if let Some(r) = row_rays.as_deref_mut() {
+                r[x] += c.rays - rays_before;
             }
-            (c, rej)
-        })
-        .reduce(
-            || (Counters::default(), Rejections::default()),
-            |(mut a, mut ra), (b, rb)| {
-                a.add(&b);
-                ra.add(&rb);
-                (a, ra)
-            },
-        );
+        }
+        if let Some(pb) = p.progress {
+            pb.inc(1);
+        }
+        (c, rej)
+    };
+    let sum = |(mut a, mut ra): (Counters, Rejections), (b, rb): (Counters, Rejections)| {
+        a.add(&b);
+        ra.add(&rb);
+        (a, ra)
+    };
+    let zero = || (Counters::default(), Rejections::default());
+    let rows = film.pixels.par_chunks_mut(w).enumerate();
+    let (counters, rejected) = match rays {
+        Some(r) => rows
+            .zip(r.par_chunks_mut(w))
+            .map(|((y, px), rr)| row(y, px, Some(rr)))
+            .reduce(zero, sum),
+        None => rows.map(|(y, px)| row(y, px, None)).reduce(zero, sum),
+    };
     film.rejected.add(&rejected);
     counters
 }

@@ -17,6 +17,11 @@ fn lobes(kd: [f32; 3], ks: [f32; 3], n: f32) -> [Lobe; 2] {
     [Lobe::Diffuse(Lambert { kd }), Lobe::Glossy(Phong { ks, n })]
 }
 
+/// Diffuse + normalized Phong.
+fn diffuse_glossy(kd: [f32; 3], ks: [f32; 3], n: f32) -> Bsdf {
+    Bsdf::DiffuseGlossy(Lambert { kd }, Phong { ks, n })
+}
+
 fn wo_at(deg: f32) -> Vec3 {
     let t = deg.to_radians();
     Vec3::new(t.sin(), 0.0, t.cos())
@@ -146,15 +151,7 @@ fn a_lobe_that_cannot_carry_the_spectrum_is_never_chosen() {
         "{s:?}"
     );
     // and the selection never chooses it
-    let bsdf = Bsdf::DiffuseGlossy(
-        Lambert {
-            kd: [0.6, 0.6, 0.0],
-        },
-        Phong {
-            ks: [0.0, 0.0, 0.3],
-            n: 10.0,
-        },
-    );
+    let bsdf = diffuse_glossy([0.6, 0.6, 0.0], [0.0, 0.0, 0.3], 10.0);
     let r = roulette(RrMode::Spectral, RrWeight::Flat, BsdfSelect::Decompose);
     let sel = r.select::<3>(0, &blue, &bsdf);
     assert!((sel.s_total - 0.3).abs() < 1e-6);
@@ -234,15 +231,7 @@ fn furnace_estimate_is_the_reflected_radiance() {
 #[test]
 fn estimate_roulette_is_unbiased_for_any_guess() {
     // E = s (X / s - (1 - s) a L~ / s) + (1 - s) a L~ = X, for every s, a, L~.
-    let bsdf = Bsdf::DiffuseGlossy(
-        Lambert {
-            kd: [0.5, 0.2, 0.1],
-        },
-        Phong {
-            ks: [0.2, 0.3, 0.1],
-            n: 8.0,
-        },
-    );
+    let bsdf = diffuse_glossy([0.5, 0.2, 0.1], [0.2, 0.3, 0.1], 8.0);
     let f = Spectrum::<3>([0.7, 1.3, 0.2]);
     let l_tilde = Spectrum::<3>([0.4, 2.0, 0.0]);
     let x = Spectrum::<3>([0.3, 0.1, 0.9]); // F times the continued walk's expectation
@@ -300,7 +289,7 @@ fn selection_weights_of_the_three_methods() {
     let kd = [0.5, 0.3, 0.1];
     let ks = [0.1, 0.3, 0.6];
     let l = lobes(kd, ks, 4.0);
-    let bsdf = Bsdf::DiffuseGlossy(Lambert { kd }, Phong { ks, n: 4.0 });
+    let bsdf = diffuse_glossy(kd, ks, 4.0);
     let s = [0.3f32, 0.45];
     let wo = wo_at(35.0);
     let wi = Vec3::new(-0.4, 0.1, 0.9).normalize();
@@ -389,15 +378,7 @@ fn every_method_reflects_the_directional_albedo() {
 
 #[test]
 fn selection_chooses_lobes_with_probability_s_i() {
-    let bsdf = Bsdf::DiffuseGlossy(
-        Lambert {
-            kd: [0.5, 0.5, 0.5],
-        },
-        Phong {
-            ks: [0.2, 0.2, 0.2],
-            n: 1000.0,
-        },
-    );
+    let bsdf = diffuse_glossy([0.5, 0.5, 0.5], [0.2, 0.2, 0.2], 1000.0);
     let r = roulette(RrMode::Classic, RrWeight::Flat, BsdfSelect::Decompose);
     let sel = r.select::<3>(0, &Spectrum::ONE, &bsdf);
     assert_eq!(sel.probabilities(), &[0.5, 0.2]);
