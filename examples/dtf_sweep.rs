@@ -47,7 +47,8 @@ fn main() {
         },
         integrator: IntegratorSettings::default(),
     };
-    let plain = render(&scene, &set, Budget::Spp(spp), None).unwrap();
+    let integ = kalos::integrator::Integrator::prepare(&scene, set.integrator).unwrap();
+    let plain = render(&scene, &integ, &set, Budget::Spp(spp), 0, &Silent).unwrap();
     let img = |f: &kalos::film::Film| RgbImage::new(f.width, f.height, f.mean_rgb());
     let base = report("plain", &img(&plain.film), &reference, None);
     {
@@ -74,7 +75,15 @@ fn main() {
         n,
         ..Default::default()
     };
-    let run = render_dtf(&scene, &set, &p0, DtfBudget::Spp(spp as f64), None).unwrap();
+    let run = render_dtf(
+        &scene,
+        &integ,
+        &set,
+        &p0,
+        DtfBudget::Spp(spp as f64),
+        &Silent,
+    )
+    .unwrap();
     report(
         "dependent only",
         &img(&run.dependent),

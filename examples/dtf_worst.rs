@@ -22,12 +22,13 @@ fn main() {
         },
         integrator: IntegratorSettings::default(),
     };
+    let integ = kalos::integrator::Integrator::prepare(&scene, set.integrator).unwrap();
     let p = DtfParams {
         n: 32,
         eps_r: eps,
         ..Default::default()
     };
-    let run = render_dtf(&scene, &set, &p, DtfBudget::RelativeError, None).unwrap();
+    let run = render_dtf(&scene, &integ, &set, &p, DtfBudget::RelativeError, &Silent).unwrap();
     let mut e: Vec<(f64, usize)> = (0..reference.data.len())
         .map(|i| {
             let (x, r) = (run.out.combined.data[i], reference.data[i]);

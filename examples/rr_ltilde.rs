@@ -6,7 +6,7 @@
 //!
 //! Run: cargo run --release --example rr_ltilde [SCENE] [RES] [SPP]
 
-use kalos::integrator::{intersect, path, Counters, IntegratorSettings};
+use kalos::integrator::{path, Counters, IntegratorSettings};
 use kalos::math::{offset_origin, Frame, Ray};
 use kalos::sampling::{square_to_cosine_hemisphere, SampleStream, SamplerConfig};
 use kalos::scene::Camera;
@@ -29,7 +29,7 @@ fn main() {
             for k in 0..spp {
                 let mut s = SampleStream::new(&cfg, 7, y * res + x, k);
                 let ray = kalos::integrator::camera_ray(&cam, x, y, &mut s);
-                let Some(hit) = intersect(&scene, &ray, f32::INFINITY) else {
+                let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
                     continue;
                 };
                 let mat = scene.material_of(hit.prim);
@@ -42,10 +42,10 @@ fn main() {
                 let wi = Frame::from_normal(ng).to_world(square_to_cosine_hemisphere(s.next_2d()));
                 let r = Ray::new(offset_origin(hit.p, ng, wi), wi);
                 let mut s2 = SampleStream::new(&cfg, 8, y * res + x, k);
-                let l = path::radiance::<3>(&scene, r, &mut s2, &set, &mut c);
+                let l = path::radiance::<3>(&scene, r, &mut s2, &set, &Spectrum::ZERO, &mut c);
                 // leave out the emission seen directly (L~ is reflected light only)
                 let mut direct = [0.0f32; 3];
-                if let Some(h2) = intersect(&scene, &r, f32::INFINITY) {
+                if let Some(h2) = scene.intersect(&r, f32::INFINITY) {
                     let m2 = scene.material_of(h2.prim);
                     if m2.is_emissive() && (-wi).dot(h2.ng) > 0.0 {
                         direct = m2.emitted((-wi).dot(h2.ng));
@@ -62,7 +62,7 @@ fn main() {
             }
         }
     }
-    let e = &scene.radiance_estimate;
+    let e = &kalos::integrator::RadianceEstimate::of_scene(&scene);
     let lt: Spectrum<3> = e.l_tilde::<3>();
     let m = sum.map(|v| v / n as f64);
     println!("scene {name}: e_s {:.4} e_L {:.4}", e.e_s, e.e_l);

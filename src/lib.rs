@@ -2,8 +2,11 @@
 //!
 //! Data flows one way: scene files -> `scene::SceneDesc` -> `scene::Scene` (+ BVH) ->
 //! estimators (`integrator`) driven by `sampling` streams -> `film` statistics ->
-//! `pipeline`s -> images (`image_io`), metrics and reports.
+//! `pipeline`s -> images (`image_io`), metrics and reports. The entry point is
+//! [`render`] with a [`RenderJob`].
 #![forbid(unsafe_code)]
+
+pub use render::{render, render_scene, RenderJob, Rendered};
 
 pub mod accel;
 pub mod cli;
@@ -15,7 +18,9 @@ pub mod light;
 pub mod material;
 pub mod math;
 pub mod metrics;
+pub mod options;
 pub mod pipeline;
+pub mod render;
 pub mod report;
 pub mod sampling;
 pub mod scene;

@@ -215,9 +215,11 @@ fn bad_options_give_one_line_errors_naming_the_option() {
     let d = temp_dir("options");
     // checked by kalos after parsing: exit 1
     for (what, extra, needles) in [
-        ("spp 0", &["--spp", "0"][..], &["--spp"][..]),
-        ("threads 0", &["--threads", "0"], &["--threads"]),
-        ("unknown extension", &["-o", "out.tga"], &["out.tga"]),
+        (
+            "unknown extension",
+            &["-o", "out.tga"][..],
+            &["out.tga"][..],
+        ),
         ("exposure nan", &["--exposure", "nan"], &["--exposure"]),
     ] {
         let (code, err) = render(&d, "cornell", extra);
@@ -225,7 +227,9 @@ fn bad_options_give_one_line_errors_naming_the_option() {
     }
     // rejected by the option parsers: usage errors, exit 2, still one line
     for (what, extra, needles) in [
-        ("res 0x0", &["--res", "0x0"][..], &["--res", "0x0"][..]),
+        ("spp 0", &["--spp", "0"][..], &["--spp"][..]),
+        ("threads 0", &["--threads", "0"], &["--threads"]),
+        ("res 0x0", &["--res", "0x0"], &["--res", "0x0"]),
         (
             "res too large",
             &["--res", "100000x100000"],

@@ -14,7 +14,7 @@ fn render_with_threads(threads: usize, kind: SamplerKind, dependent: bool) -> Ve
         .build()
         .unwrap();
     let film = pool.install(|| render_spp(&scene, &set, 8));
-    film.pixels.iter().map(|p| p.mean).collect()
+    film.pixels.iter().map(|p| p.mean()).collect()
 }
 
 #[test]
@@ -39,4 +39,70 @@ fn the_seed_changes_the_image() {
     set.sampler.seed = 2;
     let b = render_spp(&scene, &set, 4);
     assert!(a.pixels != b.pixels);
+}
+
+/// Shards: two film files of consecutive sample ranges merge into exactly the image of one
+/// render of all the samples; parts that do not belong together are refused.
+#[test]
+fn shards_merge_into_the_one_process_image() {
+    use std::process::Command;
+    let exe = env!("CARGO_BIN_EXE_kalos");
+    let dir = std::env::temp_dir().join(format!("kalos-shards-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |n: &str| dir.join(n).display().to_string();
+    let run = |args: &[&str]| {
+        let o = Command::new(exe).args(args).output().unwrap();
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stderr).to_string(),
+        )
+    };
+    let base = ["render", "cornell", "--res", "40x30", "-q"];
+    let part = |first: &str, spp: &str, out: &str, extra: &[&str]| {
+        let mut a: Vec<&str> = base.to_vec();
+        a.extend(["--first-sample", first, "--spp", spp, "-o", out]);
+        a.extend(extra);
+        run(&a)
+    };
+    assert!(part("0", "5", &p("a.kfilm"), &["--threads", "1"]).0);
+    assert!(part("5", "11", &p("b.kfilm"), &["--threads", "3"]).0);
+    let (ok, err) = run(&["merge", &p("b.kfilm"), &p("a.kfilm"), "-o", &p("m.exr")]);
+    assert!(ok, "{err}");
+    let mut all = base.to_vec();
+    all.extend(["--spp", "16", "-o"]);
+    let full = p("full.exr");
+    all.push(&full);
+    assert!(run(&all).0);
+    let read = |f: &str| kalos::image_io::read_image(std::path::Path::new(f)).unwrap();
+    assert!(
+        read(&p("m.exr")).data == read(&full).data,
+        "merged != one render"
+    );
+
+    // refusals, one line each, naming the file
+    assert!(part("3", "4", &p("over.kfilm"), &[]).0);
+    let (ok, err) = run(&["merge", &p("a.kfilm"), &p("over.kfilm"), "-o", &p("x.exr")]);
+    assert!(
+        !ok && err.contains("overlap") && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(part("5", "4", &p("seed.kfilm"), &["--seed", "9"]).0);
+    let (ok, err) = run(&["merge", &p("a.kfilm"), &p("seed.kfilm"), "-o", &p("x.exr")]);
+    assert!(
+        !ok && err.contains("seed.kfilm") && err.contains("another render"),
+        "{err}"
+    );
+    let bytes = std::fs::read(p("a.kfilm")).unwrap();
+    std::fs::write(p("cut.kfilm"), &bytes[..bytes.len() / 3]).unwrap();
+    let (ok, err) = run(&["merge", &p("cut.kfilm"), &p("b.kfilm"), "-o", &p("x.exr")]);
+    assert!(
+        !ok && err.contains("cut.kfilm") && err.contains("truncated"),
+        "{err}"
+    );
+    let mut v = bytes.clone();
+    v[10] = 7;
+    std::fs::write(p("ver.kfilm"), &v).unwrap();
+    let (ok, err) = run(&["merge", &p("ver.kfilm"), "-o", &p("x.exr")]);
+    assert!(!ok && err.contains("version 7"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
 }

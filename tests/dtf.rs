@@ -4,7 +4,8 @@
 mod common;
 use common::*;
 use kalos::filter::dtf::DtfParams;
-use kalos::pipeline::{render_dtf, DtfBudget};
+use kalos::integrator::Integrator;
+use kalos::pipeline::{render_dtf, DtfBudget, Silent};
 
 #[test]
 fn dtf_on_the_furnace_is_one() {
@@ -14,7 +15,15 @@ fn dtf_on_the_furnace_is_one() {
         n: 16,
         ..Default::default()
     };
-    let run = render_dtf(&scene, &set, &params, DtfBudget::Spp(400.0), None).unwrap();
+    let run = render_dtf(
+        &scene,
+        &Integrator::prepare(&scene, set.integrator).unwrap(),
+        &set,
+        &params,
+        DtfBudget::Spp(400.0),
+        &Silent,
+    )
+    .unwrap();
     // the displayed image: every channel of every pixel near 1, the mean very near 1
     let img = &run.out.combined;
     let mean = img.mean();
@@ -42,7 +51,15 @@ fn budget_mode_spends_the_budget() {
         n: 8,
         ..Default::default()
     };
-    let run = render_dtf(&scene, &set, &params, DtfBudget::Spp(40.0), None).unwrap();
+    let run = render_dtf(
+        &scene,
+        &Integrator::prepare(&scene, set.integrator).unwrap(),
+        &set,
+        &params,
+        DtfBudget::Spp(40.0),
+        &Silent,
+    )
+    .unwrap();
     let pixels = 32.0 * 32.0;
     let phase2 = run.independent.total_samples() as f64 / pixels;
     assert_eq!(run.dependent.total_samples() as f64 / pixels, 8.0);
@@ -74,7 +91,15 @@ fn dtf_error_keeps_falling_with_the_budget() {
     let mut last = f64::INFINITY;
     let mut errs = Vec::new();
     for budget in [32.0, 128.0, 512.0] {
-        let run = render_dtf(&scene, &set, &params, DtfBudget::Spp(budget), None).unwrap();
+        let run = render_dtf(
+            &scene,
+            &Integrator::prepare(&scene, set.integrator).unwrap(),
+            &set,
+            &params,
+            DtfBudget::Spp(budget),
+            &Silent,
+        )
+        .unwrap();
         let mse: f64 = run
             .out
             .combined
@@ -95,21 +120,22 @@ fn dtf_error_keeps_falling_with_the_budget() {
 #[test]
 fn per_pixel_ray_counts_add_up_to_the_render_counters() {
     use kalos::film::Film;
-    use kalos::pipeline::{render_into_costed, Counts};
+    use kalos::pipeline::{render_pass, Counts, Pass};
     let scene = kalos::scene::load("cornell").unwrap();
     let set = settings(&scene, 16, 16);
     let mut film = Film::new(16, 16).unwrap();
     let mut rays = vec![0u64; 256];
-    let c = render_into_costed(
-        &scene,
-        &set,
-        &mut film,
-        Counts::Uniform(4),
-        0,
-        0,
-        None,
-        Some(&mut rays),
-    );
+    let integrator = Integrator::prepare(&scene, set.integrator).unwrap();
+    let pass = Pass {
+        scene: &scene,
+        integrator: &integrator,
+        set: &set,
+        counts: Counts::Uniform(4),
+        first_index: 0,
+        stream: 0,
+        progress: &Silent,
+    };
+    let c = render_pass(&pass, &mut film, Some(&mut rays));
     assert_eq!(rays.iter().sum::<u64>(), c.rays);
     // every pixel traced at least its 4 camera rays
     assert!(rays.iter().all(|&r| r >= 4));

@@ -7,6 +7,7 @@ mod common;
 use common::*;
 use kalos::film::Film;
 use kalos::integrator::{BsdfSelect, RrMode, RrWeight};
+use kalos::options::name as opt;
 use kalos::pipeline::RenderSettings;
 use kalos::sampling::SamplerKind;
 use kalos::scene::Scene;
@@ -19,7 +20,7 @@ fn share_within_3se(film: &Film) -> f64 {
         .iter()
         .filter(|px| {
             let vm = px.variance_of_mean();
-            (0..3).all(|c| (px.mean[c] - 1.0).abs() <= 3.0 * vm[c].sqrt() + 1e-6)
+            (0..3).all(|c| (px.mean()[c] - 1.0).abs() <= 3.0 * vm[c].sqrt() + 1e-6)
         })
         .count();
     inside as f64 / film.pixels.len() as f64
@@ -75,8 +76,9 @@ fn every_combination(scene: &Scene, name: &str, selects: &[BsdfSelect]) {
     ] {
         for kind in [SamplerKind::Random, SamplerKind::Sobol] {
             for &select in selects {
-                for (rr, weight) in RrMode::ALL
-                    .into_iter()
+                for (rr, weight) in <RrMode as clap::ValueEnum>::value_variants()
+                    .iter()
+                    .copied()
                     .flat_map(|m| [(m, RrWeight::Luminance), (m, RrWeight::Flat)])
                     // h does not enter walks without roulette
                     .filter(|&(m, w)| m != RrMode::Off || w == RrWeight::Luminance)
@@ -92,9 +94,9 @@ fn every_combination(scene: &Scene, name: &str, selects: &[BsdfSelect]) {
                     let spp = if rr == RrMode::Off { 64 } else { 256 };
                     let what = format!(
                         "{name} {spectral:?} {kind:?} --rr {} --rr-weight {} --bsdf-select {}",
-                        rr.name(),
-                        weight.name(),
-                        select.name()
+                        opt(&rr),
+                        opt(&weight),
+                        opt(&select)
                     );
                     assert_furnace(scene, &set, spp, &what);
                 }
@@ -106,7 +108,11 @@ fn every_combination(scene: &Scene, name: &str, selects: &[BsdfSelect]) {
 #[test]
 fn furnace_is_one_for_every_roulette_and_selection() {
     let scene = kalos::scene::load("furnace").unwrap();
-    every_combination(&scene, "furnace", &BsdfSelect::ALL);
+    every_combination(
+        &scene,
+        "furnace",
+        <BsdfSelect as clap::ValueEnum>::value_variants(),
+    );
 }
 
 #[test]
@@ -147,11 +153,11 @@ fn furnace_with_dependent_tests_is_one() {
     let mut inside = 0;
     for px in &film.pixels {
         let vm = px.variance_of_mean();
-        if (0..3).all(|c| (px.mean[c] - 1.0).abs() <= 3.0 * vm[c].sqrt()) {
+        if (0..3).all(|c| (px.mean()[c] - 1.0).abs() <= 3.0 * vm[c].sqrt()) {
             inside += 1;
         }
         for c in 0..3 {
-            assert!((px.mean[c] - 1.0).abs() <= 4.0 * vm[c].sqrt(), "{px:?}");
+            assert!((px.mean()[c] - 1.0).abs() <= 4.0 * vm[c].sqrt(), "{px:?}");
         }
     }
     assert!(

@@ -24,7 +24,7 @@ fn regions(film: &Film) -> Vec<([f64; 3], [f64; 3])> {
                     let px = &film.pixels[film.index(x, y)];
                     let vm = px.variance_of_mean();
                     for c in 0..3 {
-                        m[c] += px.mean[c] / k;
+                        m[c] += px.mean()[c] / k;
                         v[c] += vm[c] / (k * k);
                     }
                 }
@@ -82,8 +82,8 @@ fn every_roulette_agrees_with_classic_on_cornell_glossy() {
                 let film = render_spp(&scene, &v, 256);
                 let what = format!(
                     "{spectral:?} --rr {} --bsdf-select {}",
-                    rr.name(),
-                    select.name()
+                    kalos::options::name(&rr),
+                    kalos::options::name(&select)
                 );
                 assert_eq!(film.rejected.total(), 0, "{what}");
                 let (m, se) = mean_and_se(&film);

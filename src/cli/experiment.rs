@@ -28,9 +28,11 @@
 //! options = "--method dtf --dtf-n 16"
 //! ```
 
-use super::render::{execute, RenderArgs};
+use super::render::RenderArgs;
 use crate::image_io::{read_image, write_image, RgbImage};
 use crate::metrics::Metrics;
+use crate::pipeline::Silent;
+use crate::render::render_scene;
 use crate::report::{crop, plot_panels, side_by_side, Panel, Series};
 use clap::Parser;
 use serde::{Deserialize, Serialize};
@@ -193,7 +195,11 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
         (None, None) if ex.reference.constant.is_some() => {
             let v = ex.reference.constant.unwrap_or(1.0);
             let a = parse_render(&scene_spec, &common, &format!("{fname}: options"))?;
-            let (w, h) = a.res.or(scene.defaults.res).unwrap_or((256, 256));
+            let (w, h) = a
+                .job
+                .res
+                .or(scene.defaults.res)
+                .unwrap_or(crate::render::DEFAULT_RES);
             RgbImage::new(w, h, vec![[v; 3]; (w * h) as usize])
         }
         (Some(p), None) => read_image(&dir.join(p))?,
@@ -220,7 +226,7 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
                     eprintln!("kalos: rendering the reference ({key})");
                 }
                 let args = parse_render(&scene_spec, &o, &format!("{fname}: [reference]"))?;
-                let r = execute(&args, &scene)?;
+                let r = render_scene(&scene, &args.job(), &Silent)?;
                 write_image(&cached, &r.image, 0.0, &[])?;
                 std::fs::write(&key_file, &key)
                     .map_err(|e| format!("{}: {e}", key_file.display()))?;
@@ -257,7 +263,7 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
                     "-q",
                 ]);
                 let args = parse_render(&scene_spec, &o, &format!("{fname}: config {}", c.name))?;
-                let r = execute(&args, &scene)?;
+                let r = render_scene(&scene, &args.job(), &Silent)?;
                 let metrics = Metrics::compute(&r.image, &reference)
                     .map_err(|e| format!("{fname}: config {}: against the reference: {e}", c.name))?
                     .with_seconds(r.stats.seconds);

@@ -2,6 +2,7 @@
 //! by the library. Every error is one line naming the file, line or option at fault.
 
 pub mod experiment;
+pub mod progress;
 pub mod render;
 
 use clap::{Parser, Subcommand};
@@ -41,6 +42,18 @@ pub enum Command {
         /// No per-run lines.
         #[arg(short, long)]
         quiet: bool,
+    },
+    /// Merge film files (.kfilm) of one render's sample ranges into one image or film.
+    Merge {
+        /// The parts (rendered with `-o part.kfilm --first-sample K --spp N`).
+        #[arg(required = true)]
+        parts: Vec<std::path::PathBuf>,
+        /// Output: .exr, .pfm, .png or .kfilm.
+        #[arg(short, long)]
+        output: std::path::PathBuf,
+        /// Write per-pixel variance and sample count as extra EXR layers.
+        #[arg(long)]
+        aovs: bool,
     },
     /// Print triangles, materials, emitters, bounds and load/BVH times of a scene.
     Info {
@@ -111,6 +124,11 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Experiment { file, out, quiet } => experiment::run(&file, out, quiet),
+        Command::Merge {
+            parts,
+            output,
+            aovs,
+        } => merge(&parts, &output, aovs),
         Command::Info { scene, json } => {
             let s = crate::scene::load(&scene)?;
             for w in &s.warnings {
@@ -144,7 +162,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
                     i.bvh_nodes,
                     i.bvh_bytes as f64 / 1048576.0
                 );
-                let e = &s.radiance_estimate;
+                let e = &crate::integrator::RadianceEstimate::of_scene(&s);
                 let l = e.l_tilde::<3>();
                 println!(
                     "L~           [{:.4}, {:.4}, {:.4}] (estimate roulette; a~ [{:.3}, {:.3}, {:.3}], \
@@ -163,4 +181,21 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
     }
+}
+
+/// `kalos merge`: read the parts, check they belong together, merge exactly, write.
+fn merge(parts: &[std::path::PathBuf], output: &std::path::Path, aovs: bool) -> Result<(), String> {
+    if !render::is_film_path(output) {
+        crate::image_io::format_of(output).map_err(|e| format!("-o/--output: {e}"))?;
+    }
+    let files = parts
+        .iter()
+        .map(|p| Ok((p.display().to_string(), crate::film::read_film(p)?)))
+        .collect::<Result<Vec<_>, String>>()?;
+    let m = crate::film::merge_files(&files)?;
+    if render::is_film_path(output) {
+        return crate::film::write_film(output, &m);
+    }
+    let img = crate::image_io::RgbImage::new(m.film.width, m.film.height, m.film.mean_rgb());
+    render::write_output(output, &img, &m.film, 0.0, aovs)
 }

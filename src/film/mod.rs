@@ -1,127 +1,41 @@
-//! The film keeps statistics, not just sums: for every pixel the number of samples,
-//! their mean and the sum of squared deviations (Welford, f64), per RGB channel.
-//! One sample contributes to exactly one pixel (box filter), so each pixel's statistics
-//! are its own: the filters, adaptive sampling and error estimates all read them.
+//! The film keeps statistics, not just sums: for every pixel the number of samples and
+//! the sums of the samples and of their squares per RGB channel, plus the light-tracing
+//! splats that estimators such as BDPT send to other pixels.
+//!
+//! Two kinds of input (pbrt-v4's `AddSample` / `AddSplat`):
+//! - a *sample* belongs to its own pixel: `PixelStats` keeps per-pixel statistics, which
+//!   the filters (DTF, the energy-preserving filter) and adaptive sampling read;
+//! - a *splat* lands in any pixel: the film keeps its sum and the number of light paths
+//!   that could splat; the splat image is sum x pixels / light_paths (1 / spp for a
+//!   uniform render). One sample no longer maps to one pixel, so per-sample variance is
+//!   meaningless there: the film also keeps `BATCHES` independent batch images (sample
+//!   index mod B) and estimates the variance of a pixel's value from them (batch means).
+//!
+//! Sums are exact: each f32 value is turned into a fixed-point integer (`stats::FIXED`)
+//! and integers add associatively, so the image does not depend on the order in which
+//! samples, splats or film parts arrive: any thread count, any split into shards
+//! (`file.rs`), the same bits.
 
-use serde::Serialize;
+mod file;
+mod splat;
+mod stats;
 
-/// Statistics of the samples of one pixel.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PixelStats {
-    pub n: u32,
-    pub mean: [f64; 3],
-    /// Sum of squared deviations from the mean (Welford's M2).
-    pub m2: [f64; 3],
-}
-
-impl PixelStats {
-    /// Add one sample (Welford's update). The caller has checked it is finite.
-    #[inline]
-    #[allow(clippy::needless_range_loop)]
-    pub fn push(&mut self, v: [f32; 3]) {
-        self.n += 1;
-        let inv = 1.0 / self.n as f64;
-        for c in 0..3 {
-            let x = v[c] as f64;
-            let d = x - self.mean[c];
-            self.mean[c] += d * inv;
-            self.m2[c] += d * (x - self.mean[c]);
-        }
-    }
-
-    /// Merge two sets of statistics (Chan et al.'s parallel update).
-    pub fn merge(&self, o: &PixelStats) -> PixelStats {
-        if self.n == 0 {
-            return *o;
-        }
-        if o.n == 0 {
-            return *self;
-        }
-        let n = self.n + o.n;
-        let (na, nb, nn) = (self.n as f64, o.n as f64, n as f64);
-        let mut r = PixelStats {
-            n,
-            ..Default::default()
-        };
-        for c in 0..3 {
-            let d = o.mean[c] - self.mean[c];
-            r.mean[c] = self.mean[c] + d * nb / nn;
-            r.m2[c] = self.m2[c] + o.m2[c] + d * d * na * nb / nn;
-        }
-        r
-    }
-
-    /// Sample variance per channel (n - 1 denominator); 0 with fewer than two samples.
-    #[inline]
-    pub fn variance(&self) -> [f64; 3] {
-        if self.n < 2 {
-            return [0.0; 3];
-        }
-        let k = 1.0 / (self.n - 1) as f64;
-        [self.m2[0] * k, self.m2[1] * k, self.m2[2] * k]
-    }
-
-    /// Variance of the mean per channel (sigma^2 / n).
-    #[inline]
-    pub fn variance_of_mean(&self) -> [f64; 3] {
-        let v = self.variance();
-        let n = self.n.max(1) as f64;
-        [v[0] / n, v[1] / n, v[2] / n]
-    }
-
-    #[inline]
-    pub fn mean_f32(&self) -> [f32; 3] {
-        [
-            self.mean[0] as f32,
-            self.mean[1] as f32,
-            self.mean[2] as f32,
-        ]
-    }
-}
-
-/// Counts of samples that were caught before reaching a pixel.
-#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq, Eq)]
-pub struct Rejections {
-    pub nan: u64,
-    pub infinite: u64,
-}
-
-impl Rejections {
-    pub fn total(&self) -> u64 {
-        self.nan + self.infinite
-    }
-    pub fn add(&mut self, o: &Rejections) {
-        self.nan += o.nan;
-        self.infinite += o.infinite;
-    }
-    /// Returns true if the sample may go into a pixel; counts it otherwise.
-    #[inline]
-    pub fn check(&mut self, v: &[f32; 3]) -> bool {
-        if v.iter().all(|x| x.is_finite()) {
-            return true;
-        }
-        if v.iter().any(|x| x.is_nan()) {
-            self.nan += 1;
-        } else {
-            self.infinite += 1;
-        }
-        false
-    }
-}
+pub use file::{merge_files, read_film, write_film, FilmFile, FILM_VERSION};
+pub use splat::{SplatFilm, BATCHES};
+pub use stats::{PixelStats, Rejections};
 
 /// Bytes of film storage per pixel (statistics plus the output images made from them).
 pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 3 * 4 * 4;
 
-/// Largest film kalos agrees to allocate.
-pub const MAX_FILM_BYTES: u64 = 8 << 30;
-
 /// A width x height grid of pixel statistics, row-major, y = 0 at the top.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
     pub pixels: Vec<PixelStats>,
     pub rejected: Rejections,
+    /// Splats and batch statistics; None until an estimator splats.
+    pub splats: Option<Box<SplatFilm>>,
 }
 
 impl Film {
@@ -133,7 +47,15 @@ impl Film {
             height,
             pixels: vec![PixelStats::default(); width as usize * height as usize],
             rejected: Rejections::default(),
+            splats: None,
         })
+    }
+
+    /// A film that also takes splats (and keeps batch statistics for them).
+    pub fn with_splats(width: u32, height: u32) -> Result<Film, String> {
+        let mut f = Film::new(width, height)?;
+        f.splats = Some(Box::new(SplatFilm::new(f.pixels.len())));
+        Ok(f)
     }
 
     #[inline]
@@ -141,18 +63,57 @@ impl Film {
         y as usize * self.width as usize + x as usize
     }
 
-    /// The mean image, RGB interleaved.
-    pub fn mean_rgb(&self) -> Vec<[f32; 3]> {
-        self.pixels.iter().map(|p| p.mean_f32()).collect()
+    /// Add one camera sample of sample index `index` to pixel `pixel` (checked finite).
+    #[inline]
+    pub fn add_sample(&mut self, pixel: usize, index: u32, v: [f32; 3]) {
+        if self.rejected.check(&v) {
+            self.pixels[pixel].push(v);
+            if let Some(s) = &mut self.splats {
+                s.add_sample(pixel, index, v);
+            }
+        }
     }
 
-    /// Per-pixel sample variance (n - 1 denominator), RGB.
+    /// The value of pixel `i`: the mean of its samples plus its splats.
+    #[inline]
+    pub fn value(&self, i: usize) -> [f64; 3] {
+        let m = self.pixels[i].mean();
+        match &self.splats {
+            None => m,
+            Some(s) => {
+                let sp = s.splat_value(i, self.pixels.len());
+                [m[0] + sp[0], m[1] + sp[1], m[2] + sp[2]]
+            }
+        }
+    }
+
+    /// The image: every pixel's value, RGB.
+    pub fn mean_rgb(&self) -> Vec<[f32; 3]> {
+        (0..self.pixels.len())
+            .map(|i| self.value(i).map(|v| v as f32))
+            .collect()
+    }
+
+    /// Variance of pixel `i`'s value (per channel): sigma^2 / n from its own samples, or,
+    /// with splats, from the spread of the batch images (batch means). Every method that
+    /// reads variance reads it here.
+    pub fn variance_of_value(&self, i: usize) -> [f64; 3] {
+        match &self.splats {
+            None => self.pixels[i].variance_of_mean(),
+            Some(s) => s.batch_variance(i, self.pixels.len()),
+        }
+    }
+
+    /// Per-pixel variance of one sample (n - 1 denominator), RGB; with splats, the
+    /// batch-means variance of the value scaled by n so that variance / n is the value's.
     pub fn variance_rgb(&self) -> Vec<[f32; 3]> {
-        self.pixels
-            .iter()
-            .map(|p| {
-                let v = p.variance();
-                [v[0] as f32, v[1] as f32, v[2] as f32]
+        (0..self.pixels.len())
+            .map(|i| match &self.splats {
+                None => self.pixels[i].variance().map(|v| v as f32),
+                Some(_) => {
+                    let n = self.pixels[i].n.max(1) as f64;
+                    self.variance_of_value(i).map(|v| (v * n) as f32)
+                }
             })
             .collect()
     }
@@ -165,14 +126,33 @@ impl Film {
         self.pixels.iter().map(|p| p.n as u64).sum()
     }
 
-    /// Merge another film of the same size into this one (pixel by pixel).
+    /// Merge another film of the same size into this one: exact, in any order.
     pub fn merge(&mut self, o: &Film) {
         assert_eq!((self.width, self.height), (o.width, o.height));
         for (a, b) in self.pixels.iter_mut().zip(o.pixels.iter()) {
-            *a = a.merge(b);
+            a.merge_from(b);
         }
         self.rejected.add(&o.rejected);
+        match (&mut self.splats, &o.splats) {
+            (Some(a), Some(b)) => a.merge_from(b),
+            (None, Some(b)) => self.splats = Some(b.clone()),
+            _ => {}
+        }
     }
+}
+
+/// Largest film kalos agrees to allocate: what the machine has available (or 8 GiB where
+/// that cannot be read).
+pub fn max_film_bytes() -> u64 {
+    available_memory().unwrap_or(8 << 30)
+}
+
+/// The memory the system says is available (Linux: MemAvailable), in bytes.
+pub fn available_memory() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = s.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// Check that a film of this size can be made.
@@ -183,78 +163,16 @@ pub fn check_resolution(width: u32, height: u32) -> Result<(), String> {
         ));
     }
     let bytes = width as u64 * height as u64 * BYTES_PER_PIXEL;
-    if bytes > MAX_FILM_BYTES {
+    let max = max_film_bytes();
+    if bytes > max {
         return Err(format!(
-            "resolution {width}x{height}: the film would need {:.1} GiB, more than the {} GiB kalos allows",
+            "resolution {width}x{height}: the film would need {:.1} GiB, more than the {:.1} GiB of memory available",
             bytes as f64 / (1u64 << 30) as f64,
-            MAX_FILM_BYTES >> 30
+            max as f64 / (1u64 << 30) as f64
         ));
     }
     Ok(())
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn welford_matches_two_pass() {
-        let xs = [1.0f32, 2.0, 4.0, 8.0, -3.0, 0.5];
-        let mut p = PixelStats::default();
-        for &x in &xs {
-            p.push([x, 2.0 * x, 0.0]);
-        }
-        let mean = xs.iter().map(|&x| x as f64).sum::<f64>() / xs.len() as f64;
-        let var =
-            xs.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / (xs.len() - 1) as f64;
-        assert!((p.mean[0] - mean).abs() < 1e-12);
-        assert!((p.variance()[0] - var).abs() < 1e-12);
-        assert!((p.variance()[1] - 4.0 * var).abs() < 1e-9);
-        assert_eq!(p.variance()[2], 0.0);
-    }
-
-    #[test]
-    fn merge_equals_sequential() {
-        let mut a = PixelStats::default();
-        let mut b = PixelStats::default();
-        let mut all = PixelStats::default();
-        for i in 0..10 {
-            let v = [(i * i) as f32 * 0.1, i as f32, 1.0];
-            all.push(v);
-            if i < 4 {
-                a.push(v)
-            } else {
-                b.push(v)
-            }
-        }
-        let m = a.merge(&b);
-        assert_eq!(m.n, all.n);
-        for c in 0..3 {
-            assert!((m.mean[c] - all.mean[c]).abs() < 1e-12);
-            assert!((m.m2[c] - all.m2[c]).abs() < 1e-9);
-        }
-    }
-
-    #[test]
-    fn rejects_non_finite_samples() {
-        let mut r = Rejections::default();
-        assert!(r.check(&[1.0, 2.0, 3.0]));
-        assert!(!r.check(&[f32::NAN, 2.0, 3.0]));
-        assert!(!r.check(&[f32::INFINITY, 2.0, 3.0]));
-        assert_eq!(
-            r,
-            Rejections {
-                nan: 1,
-                infinite: 1
-            }
-        );
-    }
-
-    #[test]
-    fn resolution_limits() {
-        assert!(Film::new(0, 0).is_err());
-        assert!(Film::new(4, 0).is_err());
-        assert!(check_resolution(100_000, 100_000).is_err());
-        assert!(Film::new(3, 2).is_ok());
-    }
-}
+mod tests;

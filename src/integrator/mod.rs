@@ -1,31 +1,49 @@
-//! Estimators of the radiance along camera rays. They see an immutable scene and a
-//! random stream, never the CLI.
+//! Estimators of the radiance along camera rays, behind one interface. They see an
+//! immutable scene and a random stream, never the CLI.
+//!
+//! The interface (pbrt-v4's `RayIntegrator::EvaluatePixelSample` + `Film::AddSplat`):
+//! `Integrator::prepare(&Scene, settings)` does each estimator's own precomputation once
+//! per render (the estimate roulette's L~ photon walk today; a radiosity solution or a
+//! light sampler tomorrow); then the pixel loop calls `Integrator::sample` once per camera
+//! sample, which returns the value of that sample for its own pixel and may send any
+//! number of splats to other pixels through a `SplatSink`.
 
 pub mod path;
 pub mod rr;
 
-use crate::math::{Ray, Vec2, Vec3};
-use crate::scene::Scene;
+use crate::math::{Ray, Vec2};
+use crate::sampling::SampleStream;
+use crate::scene::{Camera, Scene};
 
-pub use rr::{BsdfSelect, Roulette, RrMode, RrWeight};
+pub use rr::{BsdfSelect, RadianceEstimate, Roulette, RrMode, RrWeight};
 
 /// Paths deeper than this end regardless (a guard for unlimited depth without roulette
 /// in closed glass or white rooms; the throughput left there is below f32 precision).
 pub const HARD_MAX_DEPTH: u32 = 1024;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+/// Which estimator.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum IntegratorKind {
+    /// Unidirectional path tracing, next-event estimation + MIS.
+    #[default]
     Path,
-}
-
-impl IntegratorKind {
-    pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "path" => Some(IntegratorKind::Path),
-            _ => None,
-        }
-    }
+    /// Test only: every sample returns 0 and splats (x, y, 1) into the pixel to its right
+    /// (wrapping), so the image is known exactly.
+    #[cfg(test)]
+    #[value(skip)]
+    #[serde(skip)]
+    SplatTest,
 }
 
 /// Settings of an estimator.
@@ -73,63 +91,119 @@ impl Counters {
     }
 }
 
-/// A ray's hit with everything shading needs.
-#[derive(Clone, Copy, Debug)]
-pub struct SurfaceHit {
-    pub p: Vec3,
-    /// Unit geometric normal from the winding (counter-clockwise side).
-    pub ng: Vec3,
-    /// Unit shading normal, in the hemisphere of `ng`.
-    pub ns: Vec3,
-    pub uv: Vec2,
-    pub prim: u32,
-    pub t: f32,
+/// One splat: a contribution to pixel `pixel` by the sample of index `index`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Splat {
+    pub pixel: u32,
+    pub index: u32,
+    pub rgb: [f32; 3],
 }
 
-/// Intersect and fill in the surface information.
-#[inline]
-pub fn intersect(scene: &Scene, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
-    let h = scene.bvh.intersect(ray, t_max)?;
-    let i = h.prim as usize;
-    let t = &scene.tris[i];
-    let b0 = 1.0 - h.b1 - h.b2;
-    let p = t[0] * b0 + t[1] * h.b1 + t[2] * h.b2;
-    let ng = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
-    let ns = match &scene.normals[i] {
-        Some(n) => {
-            let s = (n[0] * b0 + n[1] * h.b1 + n[2] * h.b2).normalize_or_zero();
-            if s == Vec3::ZERO {
-                ng
-            } else if s.dot(ng) < 0.0 {
-                -s
-            } else {
-                s
+/// Where an estimator sends contributions to other pixels: a per-chunk buffer that the
+/// pipeline adds to the film in a fixed order (the film's sums are exact, so the order
+/// does not change the image either).
+#[derive(Clone, Debug, Default)]
+pub struct SplatSink {
+    pub width: u32,
+    pub height: u32,
+    /// Sample index of the camera sample being evaluated (its batch).
+    pub index: u32,
+    pub splats: Vec<Splat>,
+}
+
+impl SplatSink {
+    pub fn new(width: u32, height: u32) -> Self {
+        SplatSink {
+            width,
+            height,
+            index: 0,
+            splats: Vec::new(),
+        }
+    }
+
+    /// Splat linear RGB at raster position `p` (pixel (x, y) covers [x, x+1) x [y, y+1));
+    /// positions outside the image are dropped.
+    #[inline]
+    pub fn splat(&mut self, p: Vec2, rgb: [f32; 3]) {
+        if !(p.x >= 0.0 && p.y >= 0.0) {
+            return;
+        }
+        let (x, y) = (p.x as u32, p.y as u32);
+        if x < self.width && y < self.height {
+            self.splats.push(Splat {
+                pixel: y * self.width + x,
+                index: self.index,
+                rgb,
+            });
+        }
+    }
+}
+
+/// An estimator prepared for one scene and render.
+#[derive(Clone, Debug)]
+pub struct Integrator {
+    pub set: IntegratorSettings,
+    /// The estimate roulette's L~ (None unless the roulette uses it).
+    pub estimate: Option<RadianceEstimate>,
+}
+
+impl Integrator {
+    /// Each estimator's own precomputation for this scene.
+    pub fn prepare(scene: &Scene, set: IntegratorSettings) -> Result<Integrator, String> {
+        let estimate = set
+            .roulette
+            .mode
+            .uses_estimate()
+            .then(|| RadianceEstimate::of_scene(scene));
+        Ok(Integrator { set, estimate })
+    }
+
+    /// Whether this estimator sends splats (the film then keeps splat and batch sums).
+    pub fn splats(&self) -> bool {
+        match self.set.kind {
+            IntegratorKind::Path => false,
+            #[cfg(test)]
+            IntegratorKind::SplatTest => true,
+        }
+    }
+
+    /// One camera sample of pixel (x, y): its value (linear RGB); splats go to `sink`.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample<const N: usize>(
+        &self,
+        scene: &Scene,
+        cam: &Camera,
+        x: u32,
+        y: u32,
+        s: &mut SampleStream,
+        sink: &mut SplatSink,
+        c: &mut Counters,
+    ) -> [f32; 3] {
+        let _ = &sink; // the path tracer does not splat
+        match self.set.kind {
+            IntegratorKind::Path => {
+                let ray = camera_ray(cam, x, y, s);
+                let l_tilde = match &self.estimate {
+                    Some(e) => e.l_tilde::<N>(),
+                    None => crate::spectrum::Spectrum::ZERO,
+                };
+                path::radiance::<N>(scene, ray, s, &self.set, &l_tilde, c).to_rgb()
+            }
+            #[cfg(test)]
+            IntegratorKind::SplatTest => {
+                let _ = (scene, cam, s, c);
+                let to = Vec2::new(((x + 1) % sink.width) as f32 + 0.5, y as f32 + 0.5);
+                sink.splat(to, [x as f32, y as f32, 1.0]);
+                [0.0; 3]
             }
         }
-        None => ng,
-    };
-    let uv = match &scene.uvs[i] {
-        Some(uv) => uv[0] * b0 + uv[1] * h.b1 + uv[2] * h.b2,
-        None => Vec2::new(h.b1, h.b2),
-    };
-    Some(SurfaceHit {
-        p,
-        ng,
-        ns,
-        uv,
-        prim: h.prim,
-        t: h.t,
-    })
+    }
 }
 
 /// The camera ray of a sample of pixel (x, y): dimensions 0 and 1 jitter it in the pixel.
 #[inline]
-pub fn camera_ray(
-    cam: &crate::scene::Camera,
-    x: u32,
-    y: u32,
-    s: &mut crate::sampling::SampleStream,
-) -> Ray {
+pub fn camera_ray(cam: &Camera, x: u32, y: u32, s: &mut SampleStream) -> Ray {
     s.set_dimension(0);
     let u = s.next_2d();
     cam.ray(x as f32 + u.x, y as f32 + u.y)

@@ -10,9 +10,8 @@
 //! path asks it for a `Selection` (from the throughput F so far), weighs next-event
 //! estimation against the selection's density, and lets it decide the continuation.
 
-use super::camera_ray;
 use super::rr::Step;
-use super::{intersect, Counters, IntegratorSettings};
+use super::{Counters, IntegratorSettings};
 use crate::math::{offset_origin, Frame, Ray};
 use crate::sampling::{power_heuristic, SampleStream};
 use crate::scene::Scene;
@@ -27,6 +26,7 @@ pub fn radiance<const N: usize>(
     mut ray: Ray,
     s: &mut SampleStream,
     set: &IntegratorSettings,
+    l_tilde: &Spectrum<N>,
     c: &mut Counters,
 ) -> Spectrum<N> {
     let mut l = Spectrum::<N>::ZERO;
@@ -38,16 +38,10 @@ pub fn radiance<const N: usize>(
     let max_segments = set.max_segments();
     let mut segments = 0u32;
     let rr = &set.roulette;
-    // L~ of the estimate roulette (once per scene, copied per path).
-    let l_tilde = if rr.mode.uses_estimate() {
-        scene.radiance_estimate.l_tilde::<N>()
-    } else {
-        Spectrum::ZERO
-    };
     c.paths += 1;
     loop {
         c.rays += 1;
-        let Some(hit) = intersect(scene, &ray, f32::INFINITY) else {
+        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
             break;
         };
         segments += 1;
@@ -124,7 +118,7 @@ pub fn radiance<const N: usize>(
         // Roulette and continuation (integrator/rr.rs).
         let step = sel.sample::<N>(&bsdf, wo_l, u_lobe, u_bsdf, u_rr);
         let terminated = matches!(step, Step::Terminated);
-        if let Some(e) = rr.estimate_term(&sel, &bsdf, terminated, &beta, &l_tilde) {
+        if let Some(e) = rr.estimate_term(&sel, &bsdf, terminated, &beta, l_tilde) {
             l += e;
         }
         let Step::Continue { sample: bs, scale } = step else {
@@ -147,19 +141,4 @@ pub fn radiance<const N: usize>(
         ray = Ray::new(offset_origin(hit.p, ng, wi), wi);
     }
     l
-}
-
-/// One sample of pixel (x, y): linear RGB.
-#[inline]
-pub fn sample_pixel<const N: usize>(
-    scene: &Scene,
-    cam: &crate::scene::Camera,
-    x: u32,
-    y: u32,
-    s: &mut SampleStream,
-    set: &IntegratorSettings,
-    c: &mut Counters,
-) -> [f32; 3] {
-    let ray = camera_ray(cam, x, y, s);
-    radiance::<N>(scene, ray, s, set, c).to_rgb()
 }

@@ -41,36 +41,24 @@ use glam::{Vec2, Vec3};
 pub const MAX_LOBES: usize = 2;
 
 /// Which roulette (`--rr`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum RrMode {
+    /// No roulette.
     Off,
+    /// Continue with the albedo's weighted mean (the usual roulette).
     Classic,
+    /// The paper's spectral roulette: s_i from the arriving spectrum F.
     Spectral,
+    /// Classic roulette that adds the radiance estimate L~ when it terminates.
     Estimate,
+    /// Spectral roulette with the radiance estimate.
     SpectralEstimate,
 }
 
 impl RrMode {
-    pub const ALL: [RrMode; 5] = [
-        RrMode::Off,
-        RrMode::Classic,
-        RrMode::Spectral,
-        RrMode::Estimate,
-        RrMode::SpectralEstimate,
-    ];
-    pub fn parse(s: &str) -> Option<RrMode> {
-        RrMode::ALL.into_iter().find(|m| m.name() == s)
-    }
-    pub fn name(self) -> &'static str {
-        match self {
-            RrMode::Off => "off",
-            RrMode::Classic => "classic",
-            RrMode::Spectral => "spectral",
-            RrMode::Estimate => "estimate",
-            RrMode::SpectralEstimate => "spectral-estimate",
-        }
-    }
     /// s_i from the arriving spectrum F.
     #[inline]
     pub fn is_spectral(self) -> bool {
@@ -85,28 +73,18 @@ impl RrMode {
 
 /// The wavelength weights h_l of the spectral roulette (`--rr-weight`); for the classic
 /// roulette, luminance or average of the albedo.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum RrWeight {
+    /// h = 1 on every band.
     Flat,
+    /// h = the luminance weights of the bands.
     Luminance,
 }
 
 impl RrWeight {
-    pub fn parse(s: &str) -> Option<RrWeight> {
-        match s {
-            "flat" => Some(RrWeight::Flat),
-            "luminance" => Some(RrWeight::Luminance),
-            _ => None,
-        }
-    }
-    pub fn name(self) -> &'static str {
-        match self {
-            RrWeight::Flat => "flat",
-            RrWeight::Luminance => "luminance",
-        }
-    }
-
     /// h_l. Luminance weights are floored at 1e-3 of their peak: h_l must be positive on
     /// every band, or s_i could vanish for a lobe that still carries light to the output
     /// on that band (a bias); the 8-band table's violet band has a slightly negative
@@ -125,10 +103,12 @@ impl RrWeight {
 }
 
 /// How a combined BRDF's lobe is chosen (`--bsdf-select`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum BsdfSelect {
-    /// One-sample mixture by reflectance luminance, then a separate roulette (default).
+    /// One-sample mixture by reflectance luminance, then a separate roulette.
     Mixture,
     /// The paper's method 1.
     Decompose,
@@ -138,44 +118,29 @@ pub enum BsdfSelect {
     Mis,
 }
 
-impl BsdfSelect {
-    pub const ALL: [BsdfSelect; 4] = [
-        BsdfSelect::Mixture,
-        BsdfSelect::Decompose,
-        BsdfSelect::Static,
-        BsdfSelect::Mis,
-    ];
-    pub fn parse(s: &str) -> Option<BsdfSelect> {
-        BsdfSelect::ALL.into_iter().find(|m| m.name() == s)
-    }
-    pub fn name(self) -> &'static str {
-        match self {
-            BsdfSelect::Mixture => "mixture",
-            BsdfSelect::Decompose => "decompose",
-            BsdfSelect::Static => "static",
-            BsdfSelect::Mis => "mis",
-        }
-    }
-}
-
-/// The roulette settings an estimator gets.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The roulette settings an estimator gets; the options' names, help and defaults are
+/// written here once (the CLI flattens this struct; `Default` parses an empty line).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, clap::Args)]
+#[serde(default, deny_unknown_fields)]
 pub struct Roulette {
+    /// Russian roulette: classic | spectral | estimate | spectral-estimate | off.
+    #[arg(long = "rr", value_enum, default_value_t = RrMode::Classic)]
     pub mode: RrMode,
+    /// Wavelength weights h of the roulette: luminance | flat.
+    #[arg(long = "rr-weight", value_enum, default_value_t = RrWeight::Luminance)]
     pub weight: RrWeight,
+    /// Lobe selection of combined BRDFs: mixture | decompose | static | mis (the roulette
+    /// paper's methods 1, 2, 3, with termination folded in).
+    #[arg(long = "bsdf-select", value_enum, default_value_t = BsdfSelect::Mixture)]
     pub select: BsdfSelect,
-    /// Bounces (reflections) before roulette starts; 0 = at every reflection.
+    /// Reflections before roulette starts (0: at every reflection).
+    #[arg(long = "rr-min-depth", default_value_t = 0)]
     pub min_depth: u32,
 }
 
 impl Default for Roulette {
     fn default() -> Self {
-        Roulette {
-            mode: RrMode::Classic,
-            weight: RrWeight::Luminance,
-            select: BsdfSelect::Mixture,
-            min_depth: 0,
-        }
+        crate::options::defaults::<Roulette>()
     }
 }
 
@@ -618,5 +583,49 @@ impl RadianceEstimate {
     }
 }
 
+pub mod escape;
+
 #[cfg(test)]
 mod tests;
+
+impl RadianceEstimate {
+    /// The estimate roulette's L~ of a scene from its emitted power Phi_e, total area S,
+    /// area-weighted albedo a~ (each material's albedo bound, textures by their mean texel)
+    /// and how open the scene is: e_s and e_L from the photon walk of `escape`. Run by the
+    /// integrator's `prepare`, only when a roulette that uses it is chosen.
+    pub fn of_scene(scene: &crate::scene::Scene) -> RadianceEstimate {
+        let (materials, textures) = (&scene.materials, &scene.textures);
+        let albedo: Vec<[f64; 3]> = materials
+            .iter()
+            .map(|m| {
+                let bsdf = match m.kd_texture {
+                    Some(t) => m.bsdf.with_kd(textures[t as usize].mean()),
+                    None => m.bsdf,
+                };
+                bsdf.albedo::<3>().0.map(|v| v as f64)
+            })
+            .collect();
+        let mut area = 0.0f64;
+        let mut weighted = [0.0f64; 3];
+        for (t, &m) in scene.tris.iter().zip(&scene.tri_material) {
+            let a = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length() as f64;
+            area += a;
+            for c in 0..3 {
+                weighted[c] += a * albedo[m as usize][c];
+            }
+        }
+        let mean = weighted.map(|w| if area > 0.0 { w / area } else { 0.0 });
+        let tri_albedo: Vec<f32> = scene
+            .tri_material
+            .iter()
+            .map(|&m| {
+                let a = albedo[m as usize].map(|v| v as f32);
+                crate::spectrum::Spectrum::<3>(a)
+                    .luminance()
+                    .clamp(0.0, 1.0)
+            })
+            .collect();
+        let e = escape::escape_probabilities(&scene.tris, &scene.bvh, &scene.lights, &tri_albedo);
+        RadianceEstimate::new(scene.lights.total_power_rgb(), area, mean, e.e_s, e.e_l)
+    }
+}

@@ -5,9 +5,9 @@
 //! tracing, BDPT and radiosity shooting need.
 
 use crate::material::AlbedoTable;
+use crate::material::Material;
 use crate::math::{Frame, Vec3};
 use crate::sampling::{square_to_cosine_hemisphere, square_to_uniform_triangle, Distribution1D};
-use crate::scene::Material;
 use glam::Vec2;
 use std::sync::Arc;
 

@@ -11,6 +11,8 @@ pub mod dielectric;
 pub mod lambert;
 pub mod mirror;
 pub mod phong;
+mod surface;
+pub use surface::Material;
 
 pub use albedo::AlbedoTable;
 pub use dielectric::Dielectric;

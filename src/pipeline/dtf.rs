@@ -10,15 +10,15 @@
 //! 4. region forming and the error-optimal filter, 5. display C = (C_d n + C_i,f N)/(n + N)
 //!    (both in `filter::dtf`, pure functions of the two films).
 
-use super::render::{render_into, render_into_costed, Counts, RenderSettings};
+use super::progress::Progress;
+use super::render::{render_pass, Counts, Pass, RenderSettings};
 use crate::film::Film;
 use crate::filter::dtf::{
     allocate_budget_costed, allocate_relative, dtf_filter, top_up, top_up_budget, DtfOutput,
     DtfParams,
 };
-use crate::integrator::Counters;
+use crate::integrator::{Counters, Integrator};
 use crate::scene::Scene;
-use indicatif::ProgressBar;
 use std::time::Instant;
 
 /// How the amount of work of phase 2 is set.
@@ -59,31 +59,44 @@ impl DtfRun {
 /// Run the whole method. `set.sampler.dependent` is ignored: the phases set it.
 pub fn render_dtf(
     scene: &Scene,
+    integrator: &Integrator,
     set: &RenderSettings,
     params: &DtfParams,
     budget: DtfBudget,
-    progress: Option<&ProgressBar>,
+    progress: &dyn Progress,
 ) -> Result<DtfRun, String> {
     params.validate()?;
     let t0 = Instant::now();
     let pixels = set.width as usize * set.height as usize;
-    if let Some(pb) = progress {
-        pb.set_length(2 * set.height as u64);
-    }
+    let mut planned = params.n as u64 * pixels as u64;
+    progress.set_total(planned);
 
     // Phase of dependent tests: C_d, sigma^2 from n samples sharing random numbers.
     let mut dep_set = *set;
     dep_set.sampler.dependent = true;
     let mut dependent = Film::new(set.width, set.height)?;
     let mut rays = vec![0u64; pixels];
-    let mut counters = render_into_costed(
-        scene,
+    let pass = |set: &RenderSettings,
+                counts: Counts,
+                stream: u32,
+                film: &mut Film,
+                rays: Option<&mut [u64]>| {
+        let p = Pass {
+            scene,
+            integrator,
+            set,
+            counts,
+            first_index: 0,
+            stream,
+            progress,
+        };
+        render_pass(&p, film, rays)
+    };
+    let mut counters = pass(
         &dep_set,
-        &mut dependent,
         Counts::Uniform(params.n),
         0,
-        0,
-        progress,
+        &mut dependent,
         Some(&mut rays),
     );
     let phase1_seconds = t0.elapsed().as_secs_f64();
@@ -141,14 +154,14 @@ pub fn render_dtf(
     let mut ind_set = *set;
     ind_set.sampler.dependent = false;
     let mut independent = Film::new(set.width, set.height)?;
-    let c2 = render_into(
-        scene,
+    planned += alloc.iter().map(|&a| a as u64).sum::<u64>();
+    progress.set_total(planned);
+    let c2 = pass(
         &ind_set,
-        &mut independent,
         Counts::PerPixel(&alloc),
-        0,
         1,
-        progress,
+        &mut independent,
+        None,
     );
     counters.add(&c2);
 
@@ -190,14 +203,14 @@ pub fn render_dtf(
             break;
         }
         let mut more = Film::new(set.width, set.height)?;
-        let c = render_into(
-            scene,
+        planned += extra.iter().map(|&a| a as u64).sum::<u64>();
+        progress.set_total(planned);
+        let c = pass(
             &ind_set,
-            &mut more,
             Counts::PerPixel(&extra),
-            0,
             2 + round,
-            progress,
+            &mut more,
+            None,
         );
         counters.add(&c);
         independent.merge(&more);
@@ -207,9 +220,7 @@ pub fn render_dtf(
 
     // Region forming, filtering and display.
     let out = dtf_filter(&dependent, &independent, &classes, params)?;
-    if let Some(pb) = progress {
-        pb.finish_and_clear();
-    }
+    progress.finish();
     Ok(DtfRun {
         filter_seconds: out.seconds,
         dependent,

@@ -1,14 +1,15 @@
-//! Sample passes over the film, pixels in parallel by rows (rayon). Each sample's random
-//! numbers are a pure function of (seed, stream, pixel, sample index), and each pixel's
-//! samples are accumulated in index order by one thread, so the image is bit-identical
-//! for any thread count.
+//! The one pixel loop: sample passes over the film, pixels in parallel by rows (rayon),
+//! each camera sample evaluated by `Integrator::sample`. Each sample's random numbers are
+//! a pure function of (seed, stream, pixel, sample index) and the film's sums are exact,
+//! so the image is bit-identical for any thread count. Splats are collected per row and
+//! added to the film after the pass, in row order.
 
+use super::progress::Progress;
 use crate::film::{Film, PixelStats, Rejections};
-use crate::integrator::{path, Counters, IntegratorKind, IntegratorSettings};
+use crate::integrator::{Counters, Integrator, IntegratorSettings, Splat, SplatSink};
 use crate::sampling::{SampleStream, SamplerConfig};
 use crate::scene::{Camera, CameraDesc, Scene};
 use crate::spectrum::SpectralMode;
-use indicatif::ProgressBar;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -20,6 +21,7 @@ pub struct RenderSettings {
     pub camera: CameraDesc,
     pub spectral: SpectralMode,
     pub sampler: SamplerConfig,
+    /// The estimator's settings (`Integrator::prepare` turns them into an estimator).
     pub integrator: IntegratorSettings,
 }
 
@@ -46,122 +48,131 @@ impl Counts<'_> {
     }
 }
 
-/// Add `counts` samples to every pixel of `film`, with sample indices starting at
-/// `first_index`, drawn from random stream `stream`. Returns the work done.
-pub fn render_into(
-    scene: &Scene,
-    set: &RenderSettings,
-    film: &mut Film,
-    counts: Counts,
-    first_index: u32,
-    stream: u32,
-    progress: Option<&ProgressBar>,
-) -> Counters {
-    render_into_costed(
-        scene,
-        set,
-        film,
-        counts,
-        first_index,
-        stream,
-        progress,
-        None,
-    )
+/// One pass: what it reads (everything but the film it writes).
+#[derive(Clone, Copy)]
+pub struct Pass<'a> {
+    pub scene: &'a Scene,
+    pub integrator: &'a Integrator,
+    pub set: &'a RenderSettings,
+    pub counts: Counts<'a>,
+    /// Sample index of each pixel's first sample in this pass.
+    pub first_index: u32,
+    /// Random stream (phases of a method use different streams).
+    pub stream: u32,
+    pub progress: &'a dyn Progress,
 }
 
-/// [`render_into`] that also adds each pixel's traced rays to `rays[pixel]` (the cost of
-/// its samples, for cost-aware sample allocation).
-#[allow(clippy::too_many_arguments)]
-pub fn render_into_costed(
-    scene: &Scene,
-    set: &RenderSettings,
-    film: &mut Film,
-    counts: Counts,
-    first_index: u32,
-    stream: u32,
-    progress: Option<&ProgressBar>,
-    rays: Option<&mut [u64]>,
-) -> Counters {
-    let p = Pass {
-        scene,
-        set,
-        counts,
-        first_index,
-        stream,
-        progress,
-    };
+/// Add the pass's samples to `film`. Returns the work done; with `rays`, also adds each
+/// pixel's traced rays to `rays[pixel]` (the cost of its samples, for cost-aware sample
+/// allocation).
+pub fn render_pass(p: &Pass, film: &mut Film, rays: Option<&mut [u64]>) -> Counters {
     if let Some(r) = &rays {
         assert_eq!(r.len(), film.pixels.len(), "one ray count per pixel");
     }
-    match set.spectral {
-        SpectralMode::Rgb => pass::<3>(&p, film, rays),
-        SpectralMode::Bands8 => pass::<8>(&p, film, rays),
-        SpectralMode::Bands16 => pass::<16>(&p, film, rays),
+    if p.integrator.splats() && film.splats.is_none() {
+        let mut f = Film::with_splats(film.width, film.height).expect("same size");
+        f.merge(film);
+        *film = f;
+    }
+    match p.set.spectral {
+        SpectralMode::Rgb => pass::<3>(p, film, rays),
+        SpectralMode::Bands8 => pass::<8>(p, film, rays),
+        SpectralMode::Bands16 => pass::<16>(p, film, rays),
     }
 }
 
-/// What one pass reads: everything but the film it writes.
-struct Pass<'a> {
-    scene: &'a Scene,
-    set: &'a RenderSettings,
-    counts: Counts<'a>,
-    first_index: u32,
-    stream: u32,
-    progress: Option<&'a ProgressBar>,
+/// What one row gives back besides the pixels it wrote.
+#[derive(Default)]
+struct RowOut {
+    counters: Counters,
+    rejected: Rejections,
+    /// For splatting estimators: the row's camera samples (pixel, index, value), then
+    /// its splats, added to the film in row order after the pass.
+    samples: Vec<Splat>,
+    sink: SplatSink,
 }
 
 fn pass<const N: usize>(p: &Pass, film: &mut Film, rays: Option<&mut [u64]>) -> Counters {
-    let cam = Camera::new(p.set.camera, p.set.width, p.set.height);
+    let set = p.set;
+    let cam = Camera::new(set.camera, set.width, set.height);
     let w = film.width as usize;
-    // One row: its samples into the film, and (if asked) each pixel's rays.
+    let splatting = film.splats.is_some();
+    // One row: its samples into its pixels (or, when splatting, into the row's list), and
+    // (if asked) each pixel's rays.
     let row = |y: usize, row: &mut [PixelStats], mut row_rays: Option<&mut [u64]>| {
-        let mut c = Counters::default();
-        let mut rej = Rejections::default();
+        let mut out = RowOut {
+            sink: SplatSink::new(set.width, set.height),
+            ..Default::default()
+        };
+        if p.progress.cancelled() {
+            return out;
+        }
+        let c = &mut out.counters;
+        let mut done = 0u64;
         for (x, px) in row.iter_mut().enumerate() {
             let pixel = y * w + x;
             let rays_before = c.rays;
-            for k in 0..p.counts.get(pixel) {
-                let mut s =
-                    SampleStream::new(&p.set.sampler, p.stream, pixel as u32, p.first_index + k);
-                let v = match p.set.integrator.kind {
-                    IntegratorKind::Path => path::sample_pixel::<N>(
-                        p.scene,
-                        &cam,
-                        x as u32,
-                        y as u32,
-                        &mut s,
-                        &p.set.integrator,
-                        &mut c,
-                    ),
-                };
-                if rej.check(&v) {
+            let k_n = p.counts.get(pixel);
+            for k in 0..k_n {
+                let index = p.first_index + k;
+                let mut s = SampleStream::new(&set.sampler, p.stream, pixel as u32, index);
+                out.sink.index = index;
+                let v = p.integrator.sample::<N>(
+                    p.scene,
+                    &cam,
+                    x as u32,
+                    y as u32,
+                    &mut s,
+                    &mut out.sink,
+                    c,
+                );
+                if splatting {
+                    out.samples.push(Splat {
+                        pixel: pixel as u32,
+                        index,
+                        rgb: v,
+                    });
+                } else if out.rejected.check(&v) {
                     px.push(v);
                 }
             }
+            done += k_n as u64;
             if let Some(r) = row_rays.as_deref_mut() {
                 r[x] += c.rays - rays_before;
             }
         }
-        if let Some(pb) = p.progress {
-            pb.inc(1);
-        }
-        (c, rej)
+        p.progress.advance(done);
+        out
     };
-    let sum = |(mut a, mut ra): (Counters, Rejections), (b, rb): (Counters, Rejections)| {
-        a.add(&b);
-        ra.add(&rb);
-        (a, ra)
-    };
-    let zero = || (Counters::default(), Rejections::default());
     let rows = film.pixels.par_chunks_mut(w).enumerate();
-    let (counters, rejected) = match rays {
+    let outs: Vec<RowOut> = match rays {
         Some(r) => rows
             .zip(r.par_chunks_mut(w))
             .map(|((y, px), rr)| row(y, px, Some(rr)))
-            .reduce(zero, sum),
-        None => rows.map(|(y, px)| row(y, px, None)).reduce(zero, sum),
+            .collect(),
+        None => rows.map(|(y, px)| row(y, px, None)).collect(),
     };
-    film.rejected.add(&rejected);
+    let mut counters = Counters::default();
+    for o in outs {
+        counters.add(&o.counters);
+        film.rejected.add(&o.rejected);
+        for sm in &o.samples {
+            film.add_sample(sm.pixel as usize, sm.index, sm.rgb);
+            if let Some(sf) = film.splats.as_mut() {
+                sf.add_light_path(sm.index);
+            }
+        }
+        for sp in &o.sink.splats {
+            let mut r = Rejections::default();
+            if r.check(&sp.rgb) {
+                if let Some(sf) = film.splats.as_mut() {
+                    sf.add_splat(sp.pixel as usize, sp.index, sp.rgb);
+                }
+            } else {
+                film.rejected.add(&r);
+            }
+        }
+    }
     counters
 }
 
@@ -179,65 +190,139 @@ pub struct RenderOutput {
     pub film: Film,
     pub counters: Counters,
     pub seconds: f64,
+    /// Samples per pixel taken (fewer than asked if the render was interrupted).
     pub spp: u32,
+    pub interrupted: bool,
 }
 
-/// Plain rendering: the same number of independent samples in every pixel.
+/// Plain rendering: the same number of independent samples in every pixel, sample
+/// indices `first_index..first_index + spp` of stream 0.
 pub fn render(
     scene: &Scene,
+    integrator: &Integrator,
     set: &RenderSettings,
     budget: Budget,
-    progress: Option<&ProgressBar>,
+    first_index: u32,
+    progress: &dyn Progress,
 ) -> Result<RenderOutput, String> {
-    let mut film = Film::new(set.width, set.height)?;
+    let mut film = if integrator.splats() {
+        Film::with_splats(set.width, set.height)?
+    } else {
+        Film::new(set.width, set.height)?
+    };
+    let pixels = set.width as u64 * set.height as u64;
     let t0 = Instant::now();
     let mut counters = Counters::default();
     let mut spp = 0u32;
+    let mut interrupted = false;
+    let mut one_pass = |film: &mut Film, k: u32, spp: u32| {
+        let p = Pass {
+            scene,
+            integrator,
+            set,
+            counts: Counts::Uniform(k),
+            first_index: first_index + spp,
+            stream: 0,
+            progress,
+        };
+        counters.add(&render_pass(&p, film, None));
+    };
     match budget {
         Budget::Spp(n) => {
-            if let Some(pb) = progress {
-                pb.set_length(set.height as u64 * n.div_ceil(pass_size(n)) as u64);
-            }
-            // Passes of several samples keep the progress bar alive on long renders.
+            progress.set_total(pixels * n as u64);
+            // Passes of several samples keep the progress alive on long renders; a
+            // splatting estimator's passes are kept small (their splats are buffered).
+            let size = pass_size(n, integrator.splats(), pixels);
             while spp < n {
-                let k = pass_size(n).min(n - spp);
-                let c = render_into(scene, set, &mut film, Counts::Uniform(k), spp, 0, progress);
-                counters.add(&c);
+                let k = size.min(n - spp);
+                one_pass(&mut film, k, spp);
+                if progress.cancelled() {
+                    interrupted = true;
+                    break;
+                }
                 spp += k;
             }
         }
         Budget::Time(secs) => {
-            if let Some(pb) = progress {
-                pb.set_length(set.height as u64);
-            }
+            progress.set_total(pixels);
             loop {
-                let c = render_into(scene, set, &mut film, Counts::Uniform(1), spp, 0, progress);
-                counters.add(&c);
+                one_pass(&mut film, 1, spp);
+                if progress.cancelled() {
+                    interrupted = true;
+                    break;
+                }
                 spp += 1;
                 let el = t0.elapsed().as_secs_f64();
                 // stop when another whole pass would not fit in the budget
                 if el + el / spp as f64 > secs {
                     break;
                 }
-                if let Some(pb) = progress {
-                    let est = (secs / (el / spp as f64)).floor() as u64;
-                    pb.set_length(set.height as u64 * est.max(spp as u64 + 1));
-                }
+                let est = (secs / (el / spp as f64)).floor() as u64;
+                progress.set_total(pixels * est.max(spp as u64 + 1));
             }
         }
     }
-    if let Some(pb) = progress {
-        pb.finish_and_clear();
-    }
+    progress.finish();
     Ok(RenderOutput {
         film,
         counters,
         seconds: t0.elapsed().as_secs_f64(),
         spp,
+        interrupted,
     })
 }
 
-/// Samples per pass for an spp budget (a pass is one progress step).
-fn pass_size(n: u32) -> u32 {
-    (n / 16).clamp(1, 64)
+/// Samples per pass for an spp budget.
+fn pass_size(n: u32, splats: bool, pixels: u64) -> u32 {
+    let k = (n / 16).clamp(1, 64);
+    if splats {
+        // at most ~4M buffered camera samples per pass
+        k.min((4_000_000 / pixels.max(1)).max(1) as u32)
+    } else {
+        k
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrator::IntegratorKind;
+    use crate::pipeline::Silent;
+
+    /// Splats reach the pixel they aim at with the value sent, whatever the thread count.
+    #[test]
+    fn splats_land_where_sent_on_any_thread_count() {
+        let scene = crate::scene::load("cornell").unwrap();
+        let mut set = RenderSettings {
+            width: 7,
+            height: 5,
+            camera: scene.camera,
+            spectral: SpectralMode::Rgb,
+            sampler: SamplerConfig::default(),
+            integrator: Default::default(),
+        };
+        set.integrator.kind = IntegratorKind::SplatTest;
+        let integ = Integrator::prepare(&scene, set.integrator).unwrap();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| render(&scene, &integ, &set, Budget::Spp(11), 0, &Silent))
+                .unwrap()
+                .film
+        };
+        let one = run(1);
+        let three = run(3);
+        assert_eq!(one, three);
+        for y in 0..5u32 {
+            for x in 0..7u32 {
+                let from = (x + 6) % 7;
+                let v = one.value(one.index(x, y));
+                assert_eq!(v, [from as f64, y as f64, 1.0], "pixel ({x}, {y})");
+                assert_eq!(one.variance_of_value(one.index(x, y)), [0.0; 3]);
+            }
+        }
+        assert_eq!(one.splats.as_ref().unwrap().light_paths, 7 * 5 * 11);
+    }
 }

@@ -6,23 +6,25 @@
 //! `stream` separates phases (the independent phase of DTF uses another stream).
 
 /// Which low-level generator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum SamplerKind {
     /// A hash of the coordinates: independent uniform numbers.
+    #[default]
+    #[value(alias = "independent")]
     Random,
     /// Owen-scrambled Sobol (Burley 2020), scrambled per pixel.
     Sobol,
-}
-
-impl SamplerKind {
-    pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "random" | "independent" => Some(SamplerKind::Random),
-            "sobol" => Some(SamplerKind::Sobol),
-            _ => None,
-        }
-    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

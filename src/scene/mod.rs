@@ -4,19 +4,19 @@
 
 pub mod builtin;
 pub mod camera;
-pub mod escape;
+pub mod hit;
 pub mod mtl;
 pub mod obj;
 pub mod texture;
 pub mod toml_scene;
 
 pub use camera::{Camera, CameraDesc};
+pub use hit::SurfaceHit;
 pub use texture::Texture;
 
 use crate::accel::Bvh;
-use crate::integrator::rr::RadianceEstimate;
 use crate::light::Lights;
-use crate::material::{AlbedoTable, Bsdf};
+use crate::material::{AlbedoTable, Bsdf, Material};
 use crate::math::{Bounds3, Vec2, Vec3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -112,34 +112,6 @@ impl SceneDesc {
     }
 }
 
-/// A material ready for shading.
-#[derive(Clone, Debug)]
-pub struct Material {
-    pub name: String,
-    pub bsdf: Bsdf,
-    /// Emitted radiance (linear RGB) on the front side (counter-clockwise winding); with
-    /// `emission_table`, its cosine-weighted average (so power = pi x area x emission).
-    pub emission: [f32; 3],
-    /// Directional emission L_e(w) = 1 - a(cos theta), a the directional albedo.
-    pub emission_table: Option<Arc<AlbedoTable>>,
-    pub kd_texture: Option<u32>,
-}
-
-impl Material {
-    pub fn is_emissive(&self) -> bool {
-        self.emission.iter().any(|&e| e > 0.0)
-    }
-
-    /// Emitted radiance towards a direction at cosine `cos` to the front-side normal.
-    #[inline]
-    pub fn emitted(&self, cos: f32) -> [f32; 3] {
-        match &self.emission_table {
-            None => self.emission,
-            Some(t) => t.complement(cos),
-        }
-    }
-}
-
 /// What `kalos info` and the stats report about a scene.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct SceneInfo {
@@ -167,8 +139,6 @@ pub struct Scene {
     pub textures: Vec<Texture>,
     pub bvh: Bvh,
     pub lights: Lights,
-    /// The estimate roulette's scene-average radiance L~, computed once here.
-    pub radiance_estimate: RadianceEstimate,
     pub camera: CameraDesc,
     pub defaults: RenderDefaults,
     pub info: SceneInfo,
@@ -212,8 +182,6 @@ impl Scene {
         let bvh = Bvh::build(&desc.positions);
         let bvh_seconds = t0.elapsed().as_secs_f64();
         let lights = Lights::new(&desc.positions, &desc.material, &materials);
-        let radiance_estimate =
-            scene_radiance_estimate(&desc, &materials, &textures, &lights, &bvh);
         let bounds = desc.bounds();
         let camera = desc.camera.unwrap_or_else(|| default_camera(&bounds));
         let mut warnings = desc.warnings;
@@ -259,7 +227,6 @@ impl Scene {
             textures,
             bvh,
             lights,
-            radiance_estimate,
             camera,
             defaults: desc.defaults,
             info,
@@ -272,50 +239,6 @@ impl Scene {
     pub fn material_of(&self, prim: u32) -> &Material {
         &self.materials[self.tri_material[prim as usize] as usize]
     }
-}
-
-/// The estimate roulette's L~ from the scene's emitted power Phi_e, total area S,
-/// area-weighted albedo a~ (each material's albedo bound, textures by their mean texel)
-/// and how open the scene is: e_s and e_L from the photon walk of `escape`.
-fn scene_radiance_estimate(
-    desc: &SceneDesc,
-    materials: &[Material],
-    textures: &[Texture],
-    lights: &Lights,
-    bvh: &Bvh,
-) -> RadianceEstimate {
-    let albedo: Vec<[f64; 3]> = materials
-        .iter()
-        .map(|m| {
-            let bsdf = match m.kd_texture {
-                Some(t) => m.bsdf.with_kd(textures[t as usize].mean()),
-                None => m.bsdf,
-            };
-            bsdf.albedo::<3>().0.map(|v| v as f64)
-        })
-        .collect();
-    let mut area = 0.0f64;
-    let mut weighted = [0.0f64; 3];
-    for (t, &m) in desc.positions.iter().zip(&desc.material) {
-        let a = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length() as f64;
-        area += a;
-        for c in 0..3 {
-            weighted[c] += a * albedo[m as usize][c];
-        }
-    }
-    let mean = weighted.map(|w| if area > 0.0 { w / area } else { 0.0 });
-    let tri_albedo: Vec<f32> = desc
-        .material
-        .iter()
-        .map(|&m| {
-            let a = albedo[m as usize].map(|v| v as f32);
-            crate::spectrum::Spectrum::<3>(a)
-                .luminance()
-                .clamp(0.0, 1.0)
-        })
-        .collect();
-    let e = escape::escape_probabilities(&desc.positions, bvh, lights, &tri_albedo);
-    RadianceEstimate::new(lights.total_power_rgb(), area, mean, e.e_s, e.e_l)
 }
 
 /// A camera on +z looking at the centre of the bounds, 45 degrees vertical.

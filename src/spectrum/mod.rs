@@ -208,13 +208,30 @@ impl<const N: usize> MulAssign<f32> for Spectrum<N> {
 }
 
 /// Which spectral mode a render runs in (`--spectral rgb|8|16`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
 pub enum SpectralMode {
+    /// Three RGB bands.
+    #[default]
     #[serde(rename = "rgb")]
+    #[value(name = "rgb", alias = "3")]
     Rgb,
+    /// Eight spectral bands.
     #[serde(rename = "8")]
+    #[value(name = "8")]
     Bands8,
+    /// Sixteen spectral bands.
     #[serde(rename = "16")]
+    #[value(name = "16")]
     Bands16,
 }
 
@@ -224,21 +241,6 @@ impl SpectralMode {
             SpectralMode::Rgb => 3,
             SpectralMode::Bands8 => 8,
             SpectralMode::Bands16 => 16,
-        }
-    }
-    pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "rgb" | "3" => Some(SpectralMode::Rgb),
-            "8" => Some(SpectralMode::Bands8),
-            "16" => Some(SpectralMode::Bands16),
-            _ => None,
-        }
-    }
-    pub fn name(self) -> &'static str {
-        match self {
-            SpectralMode::Rgb => "rgb",
-            SpectralMode::Bands8 => "8",
-            SpectralMode::Bands16 => "16",
         }
     }
 }

@@ -2,8 +2,9 @@
 #![allow(dead_code)]
 
 use kalos::film::Film;
+use kalos::integrator::Integrator;
 use kalos::integrator::{IntegratorSettings, Roulette, RrMode};
-use kalos::pipeline::{render, Budget, RenderSettings};
+use kalos::pipeline::{render, Budget, RenderSettings, Silent};
 use kalos::sampling::{SamplerConfig, SamplerKind};
 use kalos::scene::Scene;
 use kalos::spectrum::SpectralMode;
@@ -31,7 +32,10 @@ pub fn settings(scene: &Scene, w: u32, h: u32) -> RenderSettings {
 }
 
 pub fn render_spp(scene: &Scene, set: &RenderSettings, spp: u32) -> Film {
-    render(scene, set, Budget::Spp(spp), None).unwrap().film
+    let integ = Integrator::prepare(scene, set.integrator).unwrap();
+    render(scene, &integ, set, Budget::Spp(spp), 0, &Silent)
+        .unwrap()
+        .film
 }
 
 /// Image mean per channel and its standard error (pixels independent).
@@ -42,7 +46,7 @@ pub fn mean_and_se(film: &Film) -> ([f64; 3], [f64; 3]) {
     for px in &film.pixels {
         let vm = px.variance_of_mean();
         for c in 0..3 {
-            m[c] += px.mean[c] / p;
+            m[c] += px.mean()[c] / p;
             v[c] += vm[c] / (p * p);
         }
     }

@@ -98,7 +98,7 @@ fn s_i_properties<const N: usize>(rng: &mut TestRng) {
         let k = 1.5 * rng.next_f32();
         let l = lobes(rgb(rng, k), rgb(rng, k), 20.0);
         let f = Spectrum::<N>::from_rgb(rgb(rng, 5.0));
-        for mode in RrMode::ALL {
+        for &mode in <RrMode as clap::ValueEnum>::value_variants() {
             for weight in [RrWeight::Flat, RrWeight::Luminance] {
                 let r = roulette(mode, weight, BsdfSelect::Mis);
                 let (s, can_stop) = r.lobe_probabilities(0, &f, &l);
@@ -217,7 +217,7 @@ fn furnace_estimate_is_the_reflected_radiance() {
     // In the furnace every wall has albedo a permutation of (1, 0.5, 0.2) and emission
     // 1 - a; the radiance is 1, of which a~ = 1.7/3 is reflected: L~ is exactly that.
     let scene = crate::scene::load("furnace").unwrap();
-    let e = &scene.radiance_estimate;
+    let e = &RadianceEstimate::of_scene(&scene);
     assert!((e.area - 24.0).abs() < 1e-4);
     for c in 0..3 {
         assert!((e.albedo[c] - 1.7 / 3.0).abs() < 1e-6);
@@ -236,7 +236,7 @@ fn estimate_roulette_is_unbiased_for_any_guess() {
     let l_tilde = Spectrum::<3>([0.4, 2.0, 0.0]);
     let x = Spectrum::<3>([0.3, 0.1, 0.9]); // F times the continued walk's expectation
     for mode in [RrMode::Estimate, RrMode::SpectralEstimate] {
-        for select in BsdfSelect::ALL {
+        for &select in <BsdfSelect as clap::ValueEnum>::value_variants() {
             let r = roulette(mode, RrWeight::Luminance, select);
             let sel = r.select::<3>(0, &f, &bsdf);
             let s = sel.s_total;

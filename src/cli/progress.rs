@@ -1,0 +1,146 @@
+//! The CLI's `Progress`: an indicatif bar on a terminal; on a pipe or a log file (farm
+//! jobs) a line every 5% or 30 s with the rate and the time left; Ctrl-C and SIGTERM
+//! stop the render at the next row, and what was rendered is written.
+
+use crate::pipeline::Progress;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::io::IsTerminal;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Mutex, OnceLock};
+use std::time::Instant;
+
+/// Set by the Ctrl-C / SIGTERM handler.
+static STOP: AtomicBool = AtomicBool::new(false);
+static HANDLER: OnceLock<()> = OnceLock::new();
+
+/// Install the Ctrl-C / SIGTERM handler once (the first asks the render to stop; a
+/// second Ctrl-C after that exits at once).
+pub fn install_interrupt_handler() {
+    HANDLER.get_or_init(|| {
+        let _ = ctrlc::set_handler(|| {
+            if STOP.swap(true, Ordering::SeqCst) {
+                eprintln!("\nkalos: interrupted twice, exiting without writing");
+                std::process::exit(130);
+            }
+            eprintln!("\nkalos: interrupted: finishing the rows under way, then writing what was rendered");
+        });
+    });
+}
+
+/// Whether the user asked to stop.
+pub fn interrupted() -> bool {
+    STOP.load(Ordering::SeqCst)
+}
+
+pub struct CliProgress {
+    bar: Option<ProgressBar>,
+    quiet: bool,
+    t0: Instant,
+    total: AtomicU64,
+    done: AtomicU64,
+    /// Log mode: the share (in 1/20) and time of the last line printed.
+    last: Mutex<(u64, f64)>,
+}
+
+impl CliProgress {
+    pub fn new(quiet: bool) -> CliProgress {
+        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+            let pb = ProgressBar::new(1);
+            pb.set_draw_target(ProgressDrawTarget::stderr());
+            pb.set_style(
+                ProgressStyle::with_template(
+                    "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta} {msg}",
+                )
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            pb
+        });
+        CliProgress {
+            bar,
+            quiet,
+            t0: Instant::now(),
+            total: AtomicU64::new(0),
+            done: AtomicU64::new(0),
+            last: Mutex::new((0, 0.0)),
+        }
+    }
+}
+
+/// "1.23 M samples/s" with a unit and three significant figures.
+pub fn rate(per_second: f64, unit: &str) -> String {
+    let (v, p) = if per_second >= 1e9 {
+        (per_second * 1e-9, "G")
+    } else if per_second >= 1e6 {
+        (per_second * 1e-6, "M")
+    } else if per_second >= 1e3 {
+        (per_second * 1e-3, "k")
+    } else {
+        (per_second, "")
+    };
+    let digits = if v >= 100.0 {
+        0
+    } else if v >= 10.0 {
+        1
+    } else {
+        2
+    };
+    format!("{v:.digits$} {p}{unit}/s")
+}
+
+impl Progress for CliProgress {
+    fn set_total(&self, samples: u64) {
+        self.total.store(samples, Ordering::Relaxed);
+        if let Some(b) = &self.bar {
+            b.set_length(samples);
+        }
+    }
+
+    fn advance(&self, samples: u64) {
+        let done = self.done.fetch_add(samples, Ordering::Relaxed) + samples;
+        let el = self.t0.elapsed().as_secs_f64();
+        if let Some(b) = &self.bar {
+            b.set_position(done);
+            b.set_message(rate(done as f64 / el.max(1e-9), "samples"));
+            return;
+        }
+        if self.quiet {
+            return;
+        }
+        let total = self.total.load(Ordering::Relaxed).max(1);
+        let twentieth = done * 20 / total;
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        // renders shorter than a second print nothing
+        if el >= 1.0 && (twentieth > last.0 || el - last.1 >= 30.0) {
+            *last = (twentieth, el);
+            let r = done as f64 / el.max(1e-9);
+            let left = total.saturating_sub(done) as f64 / r.max(1e-9);
+            eprintln!(
+                "kalos: {:>3}% {done}/{total} samples, {}, {:.0} s elapsed, about {:.0} s left",
+                (done * 100 / total).min(100),
+                rate(r, "samples"),
+                el,
+                left
+            );
+        }
+    }
+
+    fn message(&self, text: &str) {
+        if self.quiet {
+            return;
+        }
+        match &self.bar {
+            Some(b) => b.println(format!("kalos: {text}")),
+            None => eprintln!("kalos: {text}"),
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+
+    fn cancelled(&self) -> bool {
+        interrupted()
+    }
+}

@@ -1,0 +1,288 @@
+//! The film file (`.kfilm`): a film with the job that made it and the sample ranges it
+//! holds, so that renders split over processes or machines (shards) merge exactly.
+//!
+//! Layout (little endian): magic `KALOSFILM\n`, version (u32), the job as JSON (u64 length +
+//! bytes), the job's identity key as JSON (what must match for two parts to merge), the
+//! sample ranges [first, end) (u64 count + pairs), width, height, rejections, per pixel
+//! (n, 3 sums, 3 sums of squares), splats (flag, then light paths, batch paths and per
+//! pixel sums and batch sums), and the end mark `END\n`. A file that is truncated, of
+//! another version or of another job is refused with a one-line error.
+
+use super::splat::{SplatFilm, BATCHES};
+use super::stats::PixelStats;
+use super::{check_resolution, Film, Rejections};
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::path::Path;
+
+pub const FILM_VERSION: u32 = 1;
+const MAGIC: &[u8; 10] = b"KALOSFILM\n";
+const END: &[u8; 4] = b"END\n";
+
+/// A film with what made it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmFile {
+    /// The render job, as JSON (for people and for re-running).
+    pub job: String,
+    /// What two parts must share to merge: the job without its sample range and threads.
+    pub key: String,
+    /// Sample index ranges [first, end) this film holds.
+    pub ranges: Vec<(u64, u64)>,
+    pub film: Film,
+}
+
+struct W<'a>(BufWriter<&'a mut std::fs::File>);
+impl W<'_> {
+    fn b(&mut self, b: &[u8]) -> std::io::Result<()> {
+        self.0.write_all(b)
+    }
+    fn u32(&mut self, v: u32) -> std::io::Result<()> {
+        self.b(&v.to_le_bytes())
+    }
+    fn u64(&mut self, v: u64) -> std::io::Result<()> {
+        self.b(&v.to_le_bytes())
+    }
+    fn i128(&mut self, v: i128) -> std::io::Result<()> {
+        self.b(&v.to_le_bytes())
+    }
+    fn str(&mut self, s: &str) -> std::io::Result<()> {
+        self.u64(s.len() as u64)?;
+        self.b(s.as_bytes())
+    }
+}
+
+/// Write a film file.
+pub fn write_film(path: &Path, f: &FilmFile) -> Result<(), String> {
+    let err = |e: std::io::Error| format!("{}: cannot write the film: {e}", path.display());
+    let mut file = std::fs::File::create(path).map_err(err)?;
+    let mut w = W(BufWriter::new(&mut file));
+    (|| -> std::io::Result<()> {
+        w.b(MAGIC)?;
+        w.u32(FILM_VERSION)?;
+        w.str(&f.job)?;
+        w.str(&f.key)?;
+        w.u64(f.ranges.len() as u64)?;
+        for &(a, b) in &f.ranges {
+            w.u64(a)?;
+            w.u64(b)?;
+        }
+        let film = &f.film;
+        w.u32(film.width)?;
+        w.u32(film.height)?;
+        w.u64(film.rejected.nan)?;
+        w.u64(film.rejected.infinite)?;
+        for p in &film.pixels {
+            w.u32(p.n)?;
+            for c in 0..3 {
+                w.i128(p.sum[c])?;
+            }
+            for c in 0..3 {
+                w.i128(p.sum_sq[c])?;
+            }
+        }
+        match &film.splats {
+            None => w.b(&[0])?,
+            Some(s) => {
+                w.b(&[1])?;
+                w.u64(s.light_paths)?;
+                for &b in &s.batch_paths {
+                    w.u64(b)?;
+                }
+                for i in 0..s.sum.len() {
+                    for c in 0..3 {
+                        w.i128(s.sum[i][c])?;
+                    }
+                    for b in 0..BATCHES {
+                        w.u32(s.batch_n[i][b])?;
+                        for c in 0..3 {
+                            w.i128(s.batch_sum[i][b][c])?;
+                            w.i128(s.batch_splat[i][b][c])?;
+                        }
+                    }
+                }
+            }
+        }
+        w.b(END)?;
+        w.0.flush()
+    })()
+    .map_err(err)?;
+    drop(w);
+    file.sync_all().map_err(err)
+}
+
+struct R<'a> {
+    r: BufReader<std::fs::File>,
+    path: &'a Path,
+    left: u64,
+}
+impl R<'_> {
+    fn b<const K: usize>(&mut self) -> Result<[u8; K], String> {
+        let mut buf = [0u8; K];
+        self.r.read_exact(&mut buf).map_err(|_| self.short())?;
+        self.left = self.left.saturating_sub(K as u64);
+        Ok(buf)
+    }
+    fn short(&self) -> String {
+        format!(
+            "{}: the film file is truncated (or not a kalos film)",
+            self.path.display()
+        )
+    }
+    fn u32(&mut self) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(self.b()?))
+    }
+    fn u64(&mut self) -> Result<u64, String> {
+        Ok(u64::from_le_bytes(self.b()?))
+    }
+    fn i128(&mut self) -> Result<i128, String> {
+        Ok(i128::from_le_bytes(self.b()?))
+    }
+    fn str(&mut self) -> Result<String, String> {
+        let n = self.u64()?;
+        if n > self.left {
+            return Err(self.short());
+        }
+        let mut v = vec![0u8; n as usize];
+        self.r.read_exact(&mut v).map_err(|_| self.short())?;
+        self.left -= n;
+        String::from_utf8(v)
+            .map_err(|_| format!("{}: the film's job is not UTF-8", self.path.display()))
+    }
+}
+
+/// Read a film file, checking its magic, version and size before allocating.
+pub fn read_film(path: &Path) -> Result<FilmFile, String> {
+    let meta = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    if !meta.is_file() {
+        return Err(format!("{}: not a regular file", path.display()));
+    }
+    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut r = R {
+        r: BufReader::new(file),
+        path,
+        left: meta.len(),
+    };
+    let magic: [u8; 10] = r
+        .b()
+        .map_err(|_| format!("{}: not a kalos film file", path.display()))?;
+    if &magic != MAGIC {
+        return Err(format!("{}: not a kalos film file", path.display()));
+    }
+    let version = r.u32()?;
+    if version != FILM_VERSION {
+        return Err(format!(
+            "{}: film file version {version}, this kalos reads version {FILM_VERSION}",
+            path.display()
+        ));
+    }
+    let job = r.str()?;
+    let key = r.str()?;
+    let nr = r.u64()?;
+    if nr > r.left / 16 {
+        return Err(r.short());
+    }
+    let mut ranges = Vec::with_capacity(nr as usize);
+    for _ in 0..nr {
+        let a = r.u64()?;
+        let b = r.u64()?;
+        ranges.push((a, b));
+    }
+    let width = r.u32()?;
+    let height = r.u32()?;
+    let pixels = width as u64 * height as u64;
+    // 100 bytes per pixel must still be in the file.
+    if pixels.saturating_mul(100) > r.left {
+        return Err(r.short());
+    }
+    check_resolution(width, height).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut film = Film::new(width, height)?;
+    film.rejected = Rejections {
+        nan: r.u64()?,
+        infinite: r.u64()?,
+    };
+    for p in film.pixels.iter_mut() {
+        let n = r.u32()?;
+        let mut q = PixelStats {
+            n,
+            ..Default::default()
+        };
+        for c in 0..3 {
+            q.sum[c] = r.i128()?;
+        }
+        for c in 0..3 {
+            q.sum_sq[c] = r.i128()?;
+        }
+        *p = q;
+    }
+    let [flag] = r.b::<1>()?;
+    if flag == 1 {
+        if pixels.saturating_mul(48 + BATCHES as u64 * 100) > r.left {
+            return Err(r.short());
+        }
+        let mut s = SplatFilm::new(pixels as usize);
+        s.light_paths = r.u64()?;
+        for b in 0..BATCHES {
+            s.batch_paths[b] = r.u64()?;
+        }
+        for i in 0..pixels as usize {
+            for c in 0..3 {
+                s.sum[i][c] = r.i128()?;
+            }
+            for b in 0..BATCHES {
+                s.batch_n[i][b] = r.u32()?;
+                for c in 0..3 {
+                    s.batch_sum[i][b][c] = r.i128()?;
+                    s.batch_splat[i][b][c] = r.i128()?;
+                }
+            }
+        }
+        film.splats = Some(Box::new(s));
+    } else if flag != 0 {
+        return Err(format!(
+            "{}: damaged film file (splat flag {flag})",
+            path.display()
+        ));
+    }
+    let end: [u8; 4] = r.b()?;
+    if &end != END {
+        return Err(r.short());
+    }
+    Ok(FilmFile {
+        job,
+        key,
+        ranges,
+        film,
+    })
+}
+
+/// Merge film files: the same job key, the same size, disjoint sample ranges. The result
+/// is exact and independent of the order of the parts.
+pub fn merge_files(parts: &[(String, FilmFile)]) -> Result<FilmFile, String> {
+    let Some((first_name, first)) = parts.first() else {
+        return Err("merge: no film files given".into());
+    };
+    let mut out = first.clone();
+    for (name, p) in &parts[1..] {
+        if p.key != out.key {
+            return Err(format!(
+                "{name}: a part of another render than {first_name} (scene, options or seed differ)"
+            ));
+        }
+        if (p.film.width, p.film.height) != (out.film.width, out.film.height) {
+            return Err(format!(
+                "{name}: {}x{} pixels, {first_name} has {}x{}",
+                p.film.width, p.film.height, out.film.width, out.film.height
+            ));
+        }
+        for &(a, b) in &p.ranges {
+            if let Some(&(c, d)) = out.ranges.iter().find(|&&(c, d)| a < d && c < b) {
+                return Err(format!(
+                    "{name}: samples {a}..{b} overlap samples {c}..{d} of another part"
+                ));
+            }
+        }
+        out.ranges.extend_from_slice(&p.ranges);
+        out.film.merge(&p.film);
+    }
+    out.ranges.sort_unstable();
+    Ok(out)
+}

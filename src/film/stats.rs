@@ -1,0 +1,145 @@
+//! Per-pixel statistics kept exactly: the count n and, per channel, the sums of the
+//! samples and of their squares as fixed-point integers. Integer sums are associative, so
+//! merging two pixels (or two films, or two shards) gives the same bits whatever the order.
+
+/// Fixed-point scale of the sample sums: a value x is stored as trunc(x * 2^40). Values
+/// below 2^-40 (1e-12) vanish; the sum of 2^32 samples stays in range up to |x| = 2^54.
+pub const FIXED: f64 = (1u64 << 40) as f64;
+/// Fixed-point scale of the sums of squares: x^2 as trunc(x^2 * 2^56), so the second
+/// moment is resolved to 2^-56 (1.4e-17). A term is capped at 2^94 (so 2^32 of them fit
+/// an i128): samples above |x| = 2^19 (524288) count as 2^19 in the second moment only,
+/// which still marks their pixel as far from converged; the mean stays exact.
+pub const FIXED_SQ: f64 = (1u64 << 56) as f64;
+/// Largest single term, so 2^32 of them never overflow an i128.
+const TERM_MAX: f64 = 1.9e28; // < 2^94 = 1.98e28
+
+#[inline]
+fn fixed(x: f64, scale: f64) -> i128 {
+    // `as` saturates and maps NaN to 0; samples are finite here.
+    (x * scale).clamp(-TERM_MAX, TERM_MAX) as i128
+}
+
+/// Statistics of the samples of one pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PixelStats {
+    pub n: u32,
+    /// Sum of the samples, fixed point (`FIXED`).
+    pub sum: [i128; 3],
+    /// Sum of the squared samples, fixed point (`FIXED_SQ`).
+    pub sum_sq: [i128; 3],
+}
+
+impl PixelStats {
+    /// Add one sample. The caller has checked it is finite.
+    #[inline]
+    pub fn push(&mut self, v: [f32; 3]) {
+        self.n += 1;
+        for (c, &x) in v.iter().enumerate() {
+            let x = x as f64;
+            self.sum[c] += fixed(x, FIXED);
+            self.sum_sq[c] += fixed(x * x, FIXED_SQ);
+        }
+    }
+
+    /// Statistics with a given count, mean and sum of squared deviations M2 (tests and
+    /// synthetic films).
+    pub fn from_moments(n: u32, mean: [f64; 3], m2: [f64; 3]) -> PixelStats {
+        let mut p = PixelStats {
+            n,
+            ..Default::default()
+        };
+        for c in 0..3 {
+            let nf = n as f64;
+            p.sum[c] = fixed(mean[c] * nf, FIXED);
+            p.sum_sq[c] = fixed(m2[c] + nf * mean[c] * mean[c], FIXED_SQ);
+        }
+        p
+    }
+
+    /// Add another pixel's statistics (exact).
+    #[inline]
+    pub fn merge_from(&mut self, o: &PixelStats) {
+        self.n += o.n;
+        for c in 0..3 {
+            self.sum[c] += o.sum[c];
+            self.sum_sq[c] += o.sum_sq[c];
+        }
+    }
+
+    /// The two sets of statistics together.
+    pub fn merge(&self, o: &PixelStats) -> PixelStats {
+        let mut r = *self;
+        r.merge_from(o);
+        r
+    }
+
+    /// Mean per channel (0 without samples).
+    #[inline]
+    pub fn mean(&self) -> [f64; 3] {
+        if self.n == 0 {
+            return [0.0; 3];
+        }
+        let k = 1.0 / (FIXED * self.n as f64);
+        self.sum.map(|s| s as f64 * k)
+    }
+
+    /// Sum of squared deviations from the mean per channel (M2 = sum x^2 - n mean^2).
+    pub fn m2(&self) -> [f64; 3] {
+        let mean = self.mean();
+        let n = self.n as f64;
+        [0, 1, 2].map(|c| (self.sum_sq[c] as f64 / FIXED_SQ - n * mean[c] * mean[c]).max(0.0))
+    }
+
+    /// Sample variance per channel (n - 1 denominator); 0 with fewer than two samples.
+    #[inline]
+    pub fn variance(&self) -> [f64; 3] {
+        if self.n < 2 {
+            return [0.0; 3];
+        }
+        let k = 1.0 / (self.n - 1) as f64;
+        self.m2().map(|m| m * k)
+    }
+
+    /// Variance of the mean per channel (sigma^2 / n).
+    #[inline]
+    pub fn variance_of_mean(&self) -> [f64; 3] {
+        let v = self.variance();
+        let n = self.n.max(1) as f64;
+        v.map(|x| x / n)
+    }
+
+    #[inline]
+    pub fn mean_f32(&self) -> [f32; 3] {
+        self.mean().map(|v| v as f32)
+    }
+}
+
+/// Counts of samples that were caught before reaching a pixel.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize, PartialEq, Eq)]
+pub struct Rejections {
+    pub nan: u64,
+    pub infinite: u64,
+}
+
+impl Rejections {
+    pub fn total(&self) -> u64 {
+        self.nan + self.infinite
+    }
+    pub fn add(&mut self, o: &Rejections) {
+        self.nan += o.nan;
+        self.infinite += o.infinite;
+    }
+    /// Returns true if the sample may go into a pixel; counts it otherwise.
+    #[inline]
+    pub fn check(&mut self, v: &[f32; 3]) -> bool {
+        if v.iter().all(|x| x.is_finite()) {
+            return true;
+        }
+        if v.iter().any(|x| x.is_nan()) {
+            self.nan += 1;
+        } else {
+            self.infinite += 1;
+        }
+        false
+    }
+}

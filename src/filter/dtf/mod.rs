@@ -1,0 +1,93 @@
+//! Dependent-tests driven filtering (DTF), after Csonka, Szirmay-Kalos, Kelemen and Antal,
+//! "Dependent tests driven filtering in Monte-Carlo global illumination".
+//!
+//! The renderer runs two phases and hands over two films:
+//! - phase 1, *dependent tests*: every pixel takes n samples built from the same random
+//!   numbers; per pixel this gives the mean colour C_d and the spread sigma;
+//! - phase 2, *independent tests*: pixel p takes N[p] ordinary samples, mean C_i.
+//!
+//! This folder holds the renderer-independent parts: `params.rs` (the options), `alloc.rs`
+//! (N[p]), `region.rs` (region forming, weights, filter), `tests.rs`:
+//! - [`allocate_relative`] / [`allocate_budget`]: N[p] from phase 1, classified into a
+//!   few categories;
+//! - [`Dtf`] / [`dtf_filter`]: region forming per pixel (windows m x m, m = 2..m_max),
+//!   the error-minimising weights f*, the filtered C_i and the displayed colour
+//!   C = (C_d n + C_i,filtered N) / (n + N).
+//!
+//! Documented choices (where the paper leaves room):
+//! - sigma from per-channel statistics: sum of per-channel standard deviations ([`sigma`]);
+//! - N is rounded *up* to the smallest category at or above it, clamped to the largest
+//!   ([`classify`]);
+//! - black pixels: ||C_d|| = 0 with sigma = 0 gets the smallest category, with sigma > 0
+//!   the largest ([`samples_for_error`]);
+//! - budget mode: one scale factor found by bisection, then single pixels promoted to get
+//!   as close to the budget as one category step allows ([`allocate_budget`]);
+//! - pyramid kernel radius m/sqrt(2) (the window's half diagonal), not M/sqrt(2) ([`Kernel`]);
+//! - even windows: p sits at offset floor((m-1)/2) from the window's top-left corner, so
+//!   windows are nested and grow right/down on even m, left/up on odd m;
+//! - windows are clipped to the image; M counts the pixels actually in the window that
+//!   have independent samples;
+//! - [`Clamp`]: the paper's f^+ = max(f, 0), or the exact non-negative minimiser.
+
+mod alloc;
+mod params;
+mod region;
+
+pub use alloc::*;
+pub use params::*;
+pub use region::*;
+
+use crate::film::PixelStats;
+
+// ---------------------------------------------------------------------------------------
+// Colour norm and sigma
+// ---------------------------------------------------------------------------------------
+
+/// ||C||: the sum of the absolute values of the colour components (paper §4, last
+/// paragraph: norms replace absolute values for vector-valued radiance).
+#[inline]
+pub fn color_norm(c: [f64; 3]) -> f64 {
+    c[0].abs() + c[1].abs() + c[2].abs()
+}
+
+/// Delta_q = ||C_d[p] - C_d[q]||.
+#[inline]
+fn diff_norm(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (a[0] - b[0]).abs() + (a[1] - b[1]).abs() + (a[2] - b[2]).abs()
+}
+
+/// sigma[p] of the dependent phase: the spread of one sample C[s] around C_d.
+///
+/// The paper defines sigma^2 = sum_s ||C[s] - C_d||^2 / (n - 1) with the sum-of-abs norm.
+/// The film keeps only per-channel Welford statistics, so the cross terms
+/// |dr||dg| etc. are unknown; we use sigma = sum over channels of the per-channel standard
+/// deviations (n - 1 denominator), the "extent of the variance ellipsoid" of §4. By
+/// Minkowski's inequality it is an upper bound of the exact value (equal when the channel
+/// deviations are proportional with the same sign, as for grey light). Fewer than two
+/// samples give 0.
+pub fn sigma(s: &PixelStats) -> f64 {
+    s.variance().iter().map(|v| v.max(0.0).sqrt()).sum()
+}
+
+// ---------------------------------------------------------------------------------------
+// Display
+// ---------------------------------------------------------------------------------------
+
+/// Displayed colour C = (C_d n + C_i N) / (n + N) (paper §5, display step), with C_i the
+/// filtered independent colour. Both counts zero gives black.
+#[inline]
+pub fn combine(cd: [f64; 3], n: u32, ci: [f64; 3], big_n: u32) -> [f64; 3] {
+    let (a, b) = (n as f64, big_n as f64);
+    if n == 0 && big_n == 0 {
+        return [0.0; 3];
+    }
+    let k = 1.0 / (a + b);
+    [
+        (cd[0] * a + ci[0] * b) * k,
+        (cd[1] * a + ci[1] * b) * k,
+        (cd[2] * a + ci[2] * b) * k,
+    ]
+}
+
+#[cfg(test)]
+mod tests;

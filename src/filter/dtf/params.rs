@@ -1,0 +1,206 @@
+//! DTF's parameters: each option's name, help and default, written once.
+
+use serde::{Deserialize, Serialize};
+
+// ---------------------------------------------------------------------------------------
+// Parameters
+// ---------------------------------------------------------------------------------------
+
+/// Distance kernel d(q - p) that lowers the confidence in distant pixels (paper §4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Kernel {
+    /// d = max(R - ||q - p||, 0) with R = m / sqrt(2), the half diagonal of the m x m
+    /// window. The paper prints M/sqrt(2) with M = m^2, but then d would be almost flat
+    /// (for m = 4: 11.3 at the centre, 8.5 at the farthest pixel), contradicting its
+    /// purpose of "decreasing the weight of distant pixels"; with m/sqrt(2) it is a real
+    /// pyramid that falls to (nearly) zero at the window's corner. On even windows the
+    /// farthest pixel (offset (m/2, m/2)) sits exactly at R and gets weight 0.
+    #[default]
+    Pyramid,
+    /// The "better solution" the paper mentions: d = exp(-||q - p||^2 / (2 s^2)) with
+    /// s = m / (2 sqrt(2)) = R / 2, so d(R) = e^-2.
+    Gaussian,
+}
+
+/// How negative filter coefficients are removed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Clamp {
+    /// As printed: f = 1/M + sqrt(N)/(3 sigma sqrt(M)) (sum_r Delta_r / M - Delta_q),
+    /// f^+ = max(f, 0). Caveat: the mean of Delta is taken over all pixels, including the
+    /// clipped ones, so as N -> infinity the weights tend to (mean Delta - Delta_q)^+,
+    /// not to the primary pixel alone: on a colour gradient the filter does not vanish.
+    Paper,
+    /// The exact minimiser of the paper's linearised error under f >= 0 and sum f = 1
+    /// (its KKT conditions): f_q = k (lambda - Delta_q)^+ with k = sqrt(N)/(3 sigma
+    /// sqrt(M)) and lambda chosen so the positive part sums to 1 (water filling over the
+    /// sorted Delta). Equal to `Paper` whenever no coefficient is clipped; as N grows all
+    /// weight goes to pixels with Delta_q = 0, so the filter vanishes as the paper intends.
+    #[default]
+    ActiveSet,
+}
+
+/// How a sample budget is shared among pixels (budget mode, [`allocate_budget`]): N[p]
+/// proportional to a weight w[p] from phase 1.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Allocation {
+    /// w = sigma^2 / ||C_d||, as the paper prescribes for a given time or sample budget
+    /// (§3). It sits between the two optima below and concentrates samples on high-sigma
+    /// pixels (light edges) more than either.
+    Paper,
+    /// w = sigma: minimises the summed squared error sum_p sigma^2 / N[p] for a fixed total
+    /// sum_p N[p] (Lagrange: N ∝ sigma). The default: on cornell and room it gave both a
+    /// lower RMSE and a lower perceptual error than `Paper` at every budget measured.
+    #[default]
+    Mse,
+    /// w = sigma / ||C_d||: minimises the summed squared *relative* error.
+    RelMse,
+}
+
+impl Allocation {
+    /// The weight w[p] for sigma > 0 and ||C_d|| > 0.
+    #[inline]
+    pub fn weight(self, sigma: f64, cd_norm: f64) -> f64 {
+        match self {
+            Allocation::Paper => sigma * sigma / cd_norm,
+            Allocation::Mse => sigma,
+            Allocation::RelMse => sigma / cd_norm,
+        }
+    }
+}
+
+/// Parameters of DTF (paper §6 names n, eps_r, m_max and Delta f[0]_min as the four
+/// critical ones). Each option's name, help and default are written here once: the CLI
+/// flattens this struct, `Default` parses an empty command line, serde reads the same.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, clap::Args)]
+#[serde(default, deny_unknown_fields)]
+pub struct DtfParams {
+    /// DTF: dependent samples per pixel n in phase 1 (paper: 45..70). The functions here
+    /// read the actual per-pixel counts from the films (they differ only where non-finite
+    /// samples were rejected).
+    #[arg(long = "dtf-n", default_value_t = 50)]
+    pub n: u32,
+    /// DTF: prescribed relative error eps_r (used when neither --spp nor --time is given;
+    /// paper Fig. 2: 0.03).
+    #[arg(long = "dtf-eps", default_value_t = 0.03)]
+    pub eps_r: f32,
+    /// DTF: sample categories for N, comma-separated, strictly increasing (paper: "1, 10,
+    /// 20, 50, 100").
+    #[arg(long = "dtf-categories", value_delimiter = ',', default_values_t = [0u32, 1, 10, 20, 50, 100, 200, 500])]
+    pub categories: Vec<u32>,
+    /// DTF: largest region side m_max (paper: 4 is enough).
+    #[arg(long = "dtf-mmax", default_value_t = 4)]
+    pub m_max: u32,
+    /// DTF: minimal decrease Delta f[0]_min of the primary weight f*[0] to grow a region
+    /// (paper: 0.01).
+    #[arg(long = "dtf-df0", default_value_t = 0.01, allow_hyphen_values = true)]
+    pub df0_min: f32,
+    /// DTF: distance kernel d: pyramid (the paper's) or gaussian.
+    #[arg(long = "dtf-kernel", value_enum, default_value_t = Kernel::Pyramid)]
+    pub kernel: Kernel,
+    /// DTF: negative-weight removal: active-set (the exact minimiser of the paper's own
+    /// error formula under f >= 0; equal to the printed form when nothing is clipped and,
+    /// unlike it, vanishes as N grows) or paper (as printed).
+    #[arg(long = "dtf-clamp", value_enum, default_value_t = Clamp::ActiveSet)]
+    pub clamp: Clamp,
+    /// DTF: floors of sigma and ||C_d|| for the allocation, as shares of their image means
+    /// (0 = the paper's raw formula, which can starve pixels whose dependent samples
+    /// agreed). See [`robust_stats`].
+    #[arg(long = "dtf-floor", default_value_t = 0.05)]
+    pub floor: f32,
+    /// DTF with --dtf-eps: floor of sigma as a share of the pixel's own ||C_d|| (0 = none),
+    /// i.e. at least (3 F / eps_r)^2 samples per pixel: all pixels share the n dependent
+    /// jitters, so a pixel can miss a thin feature (a sliver of a light) in every one of
+    /// them and show sigma ~ 0. At eps_r = 0.01 the Cornell light's own pixels otherwise
+    /// kept a 0.8% error and the RMSE stalled (0.0086 at 0.03, 0.0082 at 0.01).
+    #[arg(long = "dtf-rel-floor", default_value_t = 0.1)]
+    pub relative_sigma_floor: f32,
+    /// DTF budget mode: clip the allocation weights at this multiple of their median (0 =
+    /// no clipping).
+    #[arg(long = "dtf-max-ratio", default_value_t = 16.0)]
+    pub max_weight_ratio: f32,
+    /// DTF budget mode: share of the budget per pixel: mse (N ∝ sigma, least squared
+    /// error), paper (N ∝ sigma^2/||C_d||, the paper's) or relmse (N ∝ sigma/||C_d||).
+    #[arg(long = "dtf-alloc", value_enum, default_value_t = Allocation::Mse)]
+    pub allocation: Allocation,
+    /// DTF budget mode: weigh the allocation by the pixels' sample costs measured in phase
+    /// 1 (rays per sample), N ∝ sigma / sqrt(c): least error for the time spent.
+    /// `--dtf-no-cost` turns it off.
+    #[arg(long = "dtf-no-cost", action = clap::ArgAction::SetFalse)]
+    pub cost_aware: bool,
+    /// DTF: top-up rounds from the statistics of all samples so far (both phases): with
+    /// --dtf-eps for pixels that miss eps_r; with --spp/--time one round that shares
+    /// --dtf-topup of phase 2's budget again (0 = the paper's single allocation).
+    #[arg(long = "dtf-rounds", default_value_t = 2)]
+    pub top_up_rounds: u32,
+    /// DTF budget modes: share of phase 2's samples held back for the top-up round.
+    #[arg(long = "dtf-topup", default_value_t = 0.25)]
+    pub top_up_share: f32,
+    /// DTF: a region stops growing at a neighbour whose N exceeds this multiple of the
+    /// pixel's own (1 = the paper's rule "N[p] < N[q]"; 2.5 tolerates one category step:
+    /// sigma^2 from n samples has a relative standard error of about sqrt(2 / (n - 1)), so
+    /// pixels of one flat region often land one category apart).
+    #[arg(long = "dtf-stop-ratio", default_value_t = 2.5)]
+    pub stop_ratio: f32,
+    /// DTF: a neighbour's colour difference Delta_q is at least what phase 2 shows beyond
+    /// this many standard errors (0 = off: Delta from the dependent phase alone, as printed).
+    #[arg(long = "dtf-guard", default_value_t = 3.0)]
+    pub guard: f32,
+}
+
+impl Default for DtfParams {
+    fn default() -> Self {
+        crate::options::defaults::<DtfParams>()
+    }
+}
+
+impl DtfParams {
+    /// A clear error for parameters the algorithm cannot use.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.n < 2 {
+            return Err(format!(
+                "dtf: n = {}: the dependent phase needs at least 2 samples per pixel to estimate sigma",
+                self.n
+            ));
+        }
+        if !(self.eps_r.is_finite() && self.eps_r > 0.0) {
+            return Err(format!(
+                "dtf: eps_r = {}: the relative error must be positive",
+                self.eps_r
+            ));
+        }
+        if self.categories.is_empty() {
+            return Err("dtf: the list of sample categories is empty".into());
+        }
+        if self.categories.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(format!(
+                "dtf: categories {:?} must be strictly increasing",
+                self.categories
+            ));
+        }
+        if !(1..=32).contains(&self.m_max) {
+            return Err(format!(
+                "dtf: m_max = {}: the window side must be 1..=32",
+                self.m_max
+            ));
+        }
+        if !(self.stop_ratio.is_finite() && self.stop_ratio >= 1.0) {
+            return Err(format!(
+                "dtf: stop ratio = {}: must be a number >= 1 (1 is the paper's rule)",
+                self.stop_ratio
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.top_up_share) {
+            return Err(format!(
+                "dtf: top-up share = {}: must be between 0 and 1",
+                self.top_up_share
+            ));
+        }
+        if !self.df0_min.is_finite() {
+            return Err(format!("dtf: df0_min = {} is not finite", self.df0_min));
+        }
+        Ok(())
+    }
+}

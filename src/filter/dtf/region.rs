@@ -1,0 +1,383 @@
+//! Region forming and the error-optimal filter weights f* (paper §4), the filtered C_i and
+//! the displayed C = (C_d n + C_i,f N) / (n + N).
+
+use super::*;
+use crate::film::Film;
+use crate::image_io::RgbImage;
+use rayon::prelude::*;
+use std::time::Instant;
+
+// ---------------------------------------------------------------------------------------
+// Region forming and filter weights
+// ---------------------------------------------------------------------------------------
+
+/// The neighbourhood of one pixel and its normalised weights f*.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Region {
+    /// Accepted window side m (1: only the primary pixel, no filtering).
+    pub m: u32,
+    /// (x, y, f*[q - p]) for every pixel q of the accepted window that has independent
+    /// samples, the primary pixel first. Non-negative, summing to 1.
+    pub weights: Vec<(u32, u32, f64)>,
+}
+
+impl Region {
+    /// M: number of pixels in the neighbourhood.
+    pub fn count(&self) -> u32 {
+        self.weights.len() as u32
+    }
+    /// f*[0], the weight of the primary pixel.
+    pub fn primary_weight(&self) -> f64 {
+        self.weights[0].2
+    }
+}
+
+/// Result of [`Dtf::run`].
+#[derive(Clone, Debug)]
+pub struct DtfOutput {
+    pub width: u32,
+    pub height: u32,
+    /// N[p]: the sample category used for region forming (the allocation).
+    pub n: Vec<u32>,
+    /// Accepted window side m per pixel (1 = unfiltered).
+    pub m: Vec<u32>,
+    /// M[p]: pixels in the accepted neighbourhood (m^2 inside the image, fewer at the
+    /// border or next to pixels without independent samples).
+    pub region: Vec<u32>,
+    /// f*[0] per pixel, for diagnostics.
+    pub primary_weight: Vec<f32>,
+    /// C_i filtered: sum_q f*[q - p] C_i[q]; black where the pixel has no independent
+    /// samples.
+    pub filtered: RgbImage,
+    /// Displayed colour C = (C_d n + C_i,filtered N) / (n + N).
+    pub combined: RgbImage,
+    /// Wall-clock seconds of the region forming, filtering and combination.
+    pub seconds: f64,
+}
+
+/// A candidate neighbour: pixel index, offset from p and Delta_q.
+#[derive(Clone, Copy, Debug)]
+struct Cand {
+    idx: usize,
+    dx: i32,
+    dy: i32,
+    delta: f64,
+}
+
+#[derive(Default)]
+struct Scratch {
+    cand: Vec<Cand>,
+    /// Accepted f*, aligned with the first entries of `cand`.
+    w: Vec<f64>,
+    tmp: Vec<f64>,
+    sorted: Vec<f64>,
+}
+
+/// Per-pixel result of [`Dtf::run`]: m, M, f*[0], filtered C_i, displayed C.
+type PixelOut = (u32, u32, f32, [f32; 3], [f32; 3]);
+
+/// The tables DTF reads, taken from the two films and the allocation.
+pub struct Dtf {
+    params: DtfParams,
+    width: usize,
+    height: usize,
+    /// C_d per pixel.
+    cd: Vec<[f64; 3]>,
+    /// sigma per pixel (phase 1).
+    sigma: Vec<f64>,
+    /// n per pixel (phase 1 count).
+    n_dep: Vec<u32>,
+    /// N per pixel, the category (for the "N[q] > N[p]" stopping rule).
+    alloc: Vec<u32>,
+    /// C_i per pixel.
+    ci: Vec<[f64; 3]>,
+    /// Actual phase-2 count per pixel.
+    n_ind: Vec<u32>,
+    /// Variance of C_i per channel (phase 2), for the independent guard.
+    ci_var: Vec<[f64; 3]>,
+}
+
+impl Dtf {
+    /// `dep`: phase-1 film (dependent tests); `indep`: phase-2 film (independent tests);
+    /// `alloc`: N[p] as returned by [`allocate_relative`] or [`allocate_budget`].
+    pub fn new(dep: &Film, indep: &Film, alloc: &[u32], params: &DtfParams) -> Result<Dtf, String> {
+        params.validate()?;
+        if (dep.width, dep.height) != (indep.width, indep.height) {
+            return Err(format!(
+                "dtf: the dependent film is {}x{} but the independent film is {}x{}",
+                dep.width, dep.height, indep.width, indep.height
+            ));
+        }
+        if alloc.len() != dep.pixels.len() || indep.pixels.len() != dep.pixels.len() {
+            return Err(format!(
+                "dtf: {} sample counts for a {}x{} film ({} pixels)",
+                alloc.len(),
+                dep.width,
+                dep.height,
+                dep.pixels.len()
+            ));
+        }
+        Ok(Dtf {
+            params: params.clone(),
+            width: dep.width as usize,
+            height: dep.height as usize,
+            cd: dep.pixels.iter().map(|s| s.mean()).collect(),
+            sigma: dep.pixels.par_iter().map(sigma).collect(),
+            n_dep: dep.pixels.iter().map(|s| s.n).collect(),
+            alloc: alloc.to_vec(),
+            // A pixel without samples has no C_i (whatever its stored mean says).
+            ci: indep
+                .pixels
+                .iter()
+                .map(|s| if s.n > 0 { s.mean() } else { [0.0; 3] })
+                .collect(),
+            n_ind: indep.pixels.iter().map(|s| s.n).collect(),
+            ci_var: indep
+                .pixels
+                .iter()
+                .map(|s| {
+                    if s.n > 1 {
+                        s.variance_of_mean()
+                    } else {
+                        [f64::INFINITY; 3]
+                    }
+                })
+                .collect(),
+        })
+    }
+
+    /// Region and weights f* of pixel (x, y) (for inspection and tests; [`Dtf::run`] uses
+    /// the same code).
+    pub fn weights(&self, x: u32, y: u32) -> Region {
+        assert!((x as usize) < self.width && (y as usize) < self.height);
+        let mut s = Scratch::default();
+        let m = self.region_into(x as usize, y as usize, &mut s);
+        Region {
+            m,
+            weights: s
+                .w
+                .iter()
+                .zip(&s.cand)
+                .map(|(&w, c)| ((c.idx % self.width) as u32, (c.idx / self.width) as u32, w))
+                .collect(),
+        }
+    }
+
+    /// The independent guard (`DtfParams::guard`, k): the true colour difference of p and q
+    /// is at least sum_c (|C_i[p] - C_i[q]|_c - k SE_c)^+, SE_c from the phase-2 variances.
+    /// Phase 1 shares its jitters among all pixels, so a light's thin edge can be missed in
+    /// every pixel of a row alike: C_d then calls two rows homogeneous that phase 2 shows
+    /// are not (Cornell, the light's lower edge: 0.94 against 0.26, averaged to 0.63). As N
+    /// grows the SE vanishes and any real difference is seen, so the filter vanishes too.
+    #[inline]
+    fn guard_delta(&self, p: usize, q: usize) -> f64 {
+        let k = self.params.guard as f64;
+        if k <= 0.0 || self.n_ind[p] < 2 || self.n_ind[q] < 2 {
+            return 0.0;
+        }
+        let (a, b, va, vb) = (self.ci[p], self.ci[q], self.ci_var[p], self.ci_var[q]);
+        (0..3)
+            .map(|c| ((a[c] - b[c]).abs() - k * (va[c] + vb[c]).sqrt()).max(0.0))
+            .sum::<f64>()
+    }
+
+    /// d(q - p) for window side m.
+    #[inline]
+    fn kernel(&self, dx: i32, dy: i32, m: u32) -> f64 {
+        let r2 = (dx * dx + dy * dy) as f64;
+        let m = m as f64;
+        match self.params.kernel {
+            Kernel::Pyramid => (m * std::f64::consts::FRAC_1_SQRT_2 - r2.sqrt()).max(0.0),
+            Kernel::Gaussian => (-4.0 * r2 / (m * m)).exp(),
+        }
+    }
+
+    /// Region forming for pixel p = (x, y) (paper §5, third step). On return the first
+    /// `s.w.len()` candidates carry the accepted weights f*; returns the accepted m.
+    fn region_into(&self, x: usize, y: usize, s: &mut Scratch) -> u32 {
+        let (w, h) = (self.width as isize, self.height as isize);
+        let p = y * self.width + x;
+        s.cand.clear();
+        s.w.clear();
+        // f*[0] = 1: the primary pixel alone.
+        s.cand.push(Cand {
+            idx: p,
+            dx: 0,
+            dy: 0,
+            delta: 0.0,
+        });
+        s.w.push(1.0);
+
+        // N = 0 (no independent samples): C_i[p] does not exist and the display gives C_d.
+        // sigma = 0: no Monte-Carlo error to trade for bias, so filtering can only hurt
+        // (and sqrt(N) / (3 sigma) would divide by zero).
+        let big_n = self.n_ind[p];
+        let sg = self.sigma[p];
+        if big_n == 0 || !(sg > 0.0 && sg.is_finite()) {
+            return 1;
+        }
+        let np_stop = self.alloc[p] as f64 * self.params.stop_ratio as f64;
+        let cdp = self.cd[p];
+        let sqrt_n = (big_n as f64).sqrt();
+
+        // Current (clipped, inclusive) window and sum_r Delta_r, both grown incrementally:
+        // with p at offset floor((m-1)/2) the m-window contains the (m-1)-window, so only
+        // the new L-shaped strip of pixels is visited.
+        let (px, py) = (x as isize, y as isize);
+        let (mut x0, mut x1, mut y0, mut y1) = (px, px, py, py);
+        let mut sum_delta = 0.0;
+        let mut f0_old = 1.0;
+        let mut m_acc = 1;
+
+        for m in 2..=self.params.m_max {
+            let off = ((m - 1) / 2) as isize;
+            let nx0 = (px - off).max(0);
+            let nx1 = (px - off + m as isize - 1).min(w - 1);
+            let ny0 = (py - off).max(0);
+            let ny1 = (py - off + m as isize - 1).min(h - 1);
+            for qy in ny0..=ny1 {
+                for qx in nx0..=nx1 {
+                    if (x0..=x1).contains(&qx) && (y0..=y1).contains(&qy) {
+                        continue;
+                    }
+                    let q = qy as usize * self.width + qx as usize;
+                    // "if N[p] < N[q] then stop for pixel p": keep the (m-1)-window. With
+                    // a tolerance of `stop_ratio` (1: the paper's rule).
+                    if self.alloc[q] as f64 > np_stop {
+                        return m_acc;
+                    }
+                    // A pixel without independent samples has no C_i to average: it is
+                    // left out of the neighbourhood (as if outside the image).
+                    if self.n_ind[q] == 0 {
+                        continue;
+                    }
+                    // Delta_q = ||C_d[p] - C_d[q]||.
+                    let delta = diff_norm(cdp, self.cd[q]).max(self.guard_delta(p, q));
+                    sum_delta += delta;
+                    s.cand.push(Cand {
+                        idx: q,
+                        dx: (qx - px) as i32,
+                        dy: (qy - py) as i32,
+                        delta,
+                    });
+                }
+            }
+            (x0, x1, y0, y1) = (nx0, nx1, ny0, ny1);
+
+            // Unnormalised coefficients f, clipped to f^+. M is the number of pixels
+            // actually in the window, so that sum f = 1 holds at the image border too.
+            let big_m = s.cand.len() as f64;
+            let k = sqrt_n / (3.0 * sg * big_m.sqrt());
+            if !k.is_finite() {
+                return m_acc;
+            }
+            s.tmp.clear();
+            match self.params.clamp {
+                Clamp::Paper => {
+                    // f = 1/M + sqrt(N)/(3 sigma sqrt(M)) (sum_r Delta_r / M - Delta_q).
+                    let mean = sum_delta / big_m;
+                    s.tmp.extend(
+                        s.cand
+                            .iter()
+                            .map(|c| (1.0 / big_m + k * (mean - c.delta)).max(0.0)),
+                    );
+                }
+                Clamp::ActiveSet => {
+                    // f = k (lambda - Delta_q)^+, lambda from the sorted Delta: the largest
+                    // active set {j smallest} with lambda_j = (1/k + sum_j Delta)/j > Delta_j.
+                    s.sorted.clear();
+                    s.sorted.extend(s.cand.iter().map(|c| c.delta));
+                    s.sorted.sort_by(f64::total_cmp);
+                    let inv_k = 1.0 / k;
+                    let (mut prefix, mut lambda) = (0.0, 0.0);
+                    for (j, &d) in s.sorted.iter().enumerate() {
+                        prefix += d;
+                        let l = (inv_k + prefix) / (j + 1) as f64;
+                        if l > d {
+                            lambda = l;
+                        } else {
+                            break;
+                        }
+                    }
+                    s.tmp
+                        .extend(s.cand.iter().map(|c| k * (lambda - c.delta).max(0.0)));
+                }
+            }
+            // f^+ d and its sum. (Not incremental: f and d both change with M.)
+            let mut sum = 0.0;
+            for (f, c) in s.tmp.iter_mut().zip(&s.cand) {
+                *f *= self.kernel(c.dx, c.dy, m);
+                sum += *f;
+            }
+            if !(sum > 0.0 && sum.is_finite()) {
+                return m_acc;
+            }
+            // f*_new[0] = f^+[0] d(0) / sum_r f^+[r-p] d(r-p): accept the m-window only if
+            // the primary weight drops by at least Delta f[0]_min.
+            let f0_new = s.tmp[0] / sum;
+            if f0_old - f0_new < self.params.df0_min as f64 {
+                return m_acc;
+            }
+            let inv = 1.0 / sum;
+            s.w.clear();
+            s.w.extend(s.tmp.iter().map(|f| f * inv));
+            f0_old = f0_new;
+            m_acc = m;
+        }
+        m_acc
+    }
+
+    /// Region forming, filtering and display for every pixel (in parallel).
+    pub fn run(&self) -> DtfOutput {
+        let t0 = Instant::now();
+        let per_pixel: Vec<PixelOut> = (0..self.width * self.height)
+            .into_par_iter()
+            .map_init(Scratch::default, |s, p| {
+                let (x, y) = (p % self.width, p / self.width);
+                let m = self.region_into(x, y, s);
+                // C_i,filtered = sum_q f*[q-p] C_i[q]  (C_i[p] = 0 when N[p] = 0).
+                let mut c = [0.0f64; 3];
+                for (&wq, cq) in s.w.iter().zip(&s.cand) {
+                    for (ch, v) in c.iter_mut().enumerate() {
+                        *v += wq * self.ci[cq.idx][ch];
+                    }
+                }
+                // C = (C_d n + C_i N) / (n + N).
+                let disp = combine(self.cd[p], self.n_dep[p], c, self.n_ind[p]);
+                let f32s = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32];
+                (m, s.w.len() as u32, s.w[0] as f32, f32s(c), f32s(disp))
+            })
+            .collect();
+        let (w, h) = (self.width as u32, self.height as u32);
+        let out = DtfOutput {
+            width: w,
+            height: h,
+            n: self.alloc.clone(),
+            m: per_pixel.iter().map(|r| r.0).collect(),
+            region: per_pixel.iter().map(|r| r.1).collect(),
+            primary_weight: per_pixel.iter().map(|r| r.2).collect(),
+            filtered: RgbImage::new(w, h, per_pixel.iter().map(|r| r.3).collect()),
+            combined: RgbImage::new(w, h, per_pixel.iter().map(|r| r.4).collect()),
+            seconds: 0.0,
+        };
+        DtfOutput {
+            seconds: t0.elapsed().as_secs_f64(),
+            ..out
+        }
+    }
+}
+
+/// DTF in one call: [`Dtf::new`] then [`Dtf::run`]; `seconds` includes building the tables.
+pub fn dtf_filter(
+    dep: &Film,
+    indep: &Film,
+    alloc: &[u32],
+    params: &DtfParams,
+) -> Result<DtfOutput, String> {
+    let t0 = Instant::now();
+    let out = Dtf::new(dep, indep, alloc, params)?.run();
+    Ok(DtfOutput {
+        seconds: t0.elapsed().as_secs_f64(),
+        ..out
+    })
+}

@@ -1,0 +1,33 @@
+//! A surface's material ready for shading: its BSDF, its emission (one-sided, on the
+//! counter-clockwise side) and an optional diffuse texture.
+
+use super::{AlbedoTable, Bsdf};
+use std::sync::Arc;
+
+/// A material ready for shading.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    pub bsdf: Bsdf,
+    /// Emitted radiance (linear RGB) on the front side (counter-clockwise winding); with
+    /// `emission_table`, its cosine-weighted average (so power = pi x area x emission).
+    pub emission: [f32; 3],
+    /// Directional emission L_e(w) = 1 - a(cos theta), a the directional albedo.
+    pub emission_table: Option<Arc<AlbedoTable>>,
+    pub kd_texture: Option<u32>,
+}
+
+impl Material {
+    pub fn is_emissive(&self) -> bool {
+        self.emission.iter().any(|&e| e > 0.0)
+    }
+
+    /// Emitted radiance towards a direction at cosine `cos` to the front-side normal.
+    #[inline]
+    pub fn emitted(&self, cos: f32) -> [f32; 3] {
+        match &self.emission_table {
+            None => self.emission,
+            Some(t) => t.complement(cos),
+        }
+    }
+}

@@ -1,0 +1,24 @@
+//! Progress of a render as a small trait: the pipelines report the work they plan and the
+//! work done, and ask whether to stop (Ctrl-C, a Python KeyboardInterrupt). The CLI's
+//! progress bar and log lines are one implementation (`cli::progress`); `Silent` is none.
+
+/// What a pipeline tells about its progress, in camera samples.
+pub trait Progress: Sync {
+    /// The total work changed (samples planned so far).
+    fn set_total(&self, _samples: u64) {}
+    /// `samples` more samples are done.
+    fn advance(&self, _samples: u64) {}
+    /// A line of news (predicted work, phase changes).
+    fn message(&self, _text: &str) {}
+    /// The render is over.
+    fn finish(&self) {}
+    /// True when the user asked to stop: the pipeline ends at the next row and returns
+    /// what it has.
+    fn cancelled(&self) -> bool {
+        false
+    }
+}
+
+/// No progress reporting.
+pub struct Silent;
+impl Progress for Silent {}

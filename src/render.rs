@@ -1,0 +1,475 @@
+//! The library's entry point: a serde-(de)serialisable `RenderJob` (what to render and
+//! how) and `render(&job, &progress) -> Rendered` (film, image, statistics). The CLI,
+//! `kalos experiment`, the examples, the tests and the Python module all go through it.
+//!
+//! ```text
+//! RenderJob -> scene::load -> Integrator::prepare(&Scene, settings)
+//!           -> pipeline (plain passes | dtf phases) -> Film -> image + stats
+//! ```
+
+use crate::film::Film;
+use crate::filter::dtf::DtfParams;
+use crate::image_io::RgbImage;
+use crate::integrator::{Counters, Integrator, IntegratorKind, IntegratorSettings, Roulette};
+use crate::options::{name, parse_depth, parse_res, parse_seconds, parse_spp, parse_threads};
+use crate::pipeline::{self, Budget, DtfBudget, DtfRun, Progress, RenderSettings};
+use crate::sampling::{SamplerConfig, SamplerKind};
+use crate::scene::{CameraDesc, Scene};
+use crate::spectrum::SpectralMode;
+use serde::{Deserialize, Serialize};
+
+/// Rendering method.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// The same number of samples in every pixel.
+    #[default]
+    Plain,
+    /// Dependent-tests driven filtering (Csonka et al.).
+    Dtf,
+}
+
+/// Samples per pixel of a plain render when neither the job nor the scene file says.
+pub const DEFAULT_SPP: u32 = 64;
+/// Resolution when neither the job nor the scene file says.
+pub const DEFAULT_RES: (u32, u32) = (256, 256);
+/// Worker threads are capped at this multiple of the logical CPUs.
+pub const MAX_THREADS_PER_CPU: usize = 4;
+
+/// Everything that decides a render: scene, camera and resolution overrides, method,
+/// estimator, sampler, roulette, budget, seed, first sample index and threads. Each
+/// option's name, help and default is written here once (clap attributes); `Default`
+/// parses an empty command line.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, clap::Args)]
+#[serde(default, deny_unknown_fields)]
+pub struct RenderJob {
+    /// Built-in scene name (see `kalos scenes`), .obj or .toml file (the CLI's positional
+    /// argument).
+    #[arg(skip)]
+    pub scene: String,
+    /// Samples per pixel (default 64, or the scene file's).
+    #[arg(long, conflicts_with = "time", value_parser = parse_spp)]
+    pub spp: Option<u32>,
+    /// Render for this many seconds (whole passes) instead of a fixed spp.
+    #[arg(long, value_parser = parse_seconds)]
+    pub time: Option<f64>,
+    /// Resolution WxH (default: the scene's, else 256x256).
+    #[arg(long, value_parser = parse_res)]
+    pub res: Option<(u32, u32)>,
+    /// Camera "ox,oy,oz,tx,ty,tz,ux,uy,uz,fov" (overrides the scene's).
+    #[arg(long, allow_hyphen_values = true, value_parser = CameraDesc::parse)]
+    pub camera: Option<CameraDesc>,
+    /// Rendering method: plain (same spp everywhere) or dtf (dependent-tests driven filtering).
+    #[arg(long, value_enum, default_value_t = Method::Plain)]
+    pub method: Method,
+    /// Estimator.
+    #[arg(long, value_enum, default_value_t = IntegratorKind::Path)]
+    pub integrator: IntegratorKind,
+    /// Mitsuba's max_depth: 1 = emitters seen directly, 2 = direct light, -1 = unlimited
+    /// (default: the scene file's, else -1).
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_depth)]
+    pub max_depth: Option<i32>,
+    /// Spectral bands: rgb | 8 | 16.
+    #[arg(long, value_enum, default_value_t = SpectralMode::Rgb)]
+    pub spectral: SpectralMode,
+    /// Sampler: random | sobol (Owen-scrambled).
+    #[arg(long, value_enum, default_value_t = SamplerKind::Random)]
+    pub sampler: SamplerKind,
+    /// All pixels use the same random numbers per sample index (dependent tests).
+    #[arg(long)]
+    pub dependent: bool,
+    #[command(flatten)]
+    pub roulette: Roulette,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Index of the first sample (a shard of a render takes samples first..first+spp).
+    #[arg(long, default_value_t = 0)]
+    pub first_sample: u32,
+    /// Worker threads (default: all cores; capped at 4x the logical CPUs).
+    #[arg(long, value_parser = parse_threads)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub dtf: DtfParams,
+}
+
+impl Default for RenderJob {
+    fn default() -> Self {
+        crate::options::defaults::<RenderJob>()
+    }
+}
+
+impl RenderJob {
+    /// A job for `scene` with every other option at its default.
+    pub fn new(scene: &str) -> RenderJob {
+        RenderJob {
+            scene: scene.to_string(),
+            ..Default::default()
+        }
+    }
+
+    /// What two film parts must share to merge: the job without its sample range,
+    /// budget and threads, as JSON.
+    pub fn key(&self) -> String {
+        let mut j = self.clone();
+        j.first_sample = 0;
+        j.spp = None;
+        j.time = None;
+        j.threads = None;
+        serde_json::to_string(&j).unwrap_or_default()
+    }
+
+    /// The settings that decide a sample's value, for this scene.
+    pub fn settings(&self, scene: &Scene) -> RenderSettings {
+        let (width, height) = self.res.or(scene.defaults.res).unwrap_or(DEFAULT_RES);
+        RenderSettings {
+            width,
+            height,
+            camera: self.camera.unwrap_or(scene.camera),
+            spectral: self.spectral,
+            sampler: SamplerConfig {
+                kind: self.sampler,
+                seed: self.seed,
+                dependent: self.dependent,
+            },
+            integrator: IntegratorSettings {
+                kind: self.integrator,
+                max_depth: self.max_depth.or(scene.defaults.max_depth).unwrap_or(-1),
+                roulette: self.roulette,
+            },
+        }
+    }
+
+    /// Refuse contradictory or unusable settings.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.spp == Some(0) {
+            return Err("--spp: must be at least 1".into());
+        }
+        if self.threads == Some(0) {
+            return Err("--threads: must be at least 1".into());
+        }
+        if self.spp.is_some() && self.time.is_some() {
+            return Err("--spp and --time: give one budget, not both".into());
+        }
+        if let Some(t) = self.time {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(format!("--time {t}: must be a positive number of seconds"));
+            }
+        }
+        if self.method == Method::Dtf {
+            self.dtf.validate()?;
+        }
+        Ok(())
+    }
+}
+
+/// Statistics of a render (`--stats`, Python's `result.stats`).
+#[derive(Clone, Debug, Serialize)]
+pub struct RenderStats {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub first_sample: u32,
+    pub seconds: f64,
+    pub paths: u64,
+    pub rays: u64,
+    pub paths_per_second: f64,
+    pub rays_per_second: f64,
+    pub bvh_build_seconds: f64,
+    pub load_seconds: f64,
+    pub prepare_seconds: f64,
+    pub rejected_samples: u64,
+    pub rejected_nan: u64,
+    pub rejected_infinite: u64,
+    pub threads: usize,
+    pub spectral: String,
+    pub sampler: SamplerKind,
+    pub dependent: bool,
+    pub max_depth: i32,
+    pub integrator: IntegratorKind,
+    pub rr: crate::integrator::RrMode,
+    pub rr_weight: crate::integrator::RrWeight,
+    pub rr_min_depth: u32,
+    pub bsdf_select: crate::integrator::BsdfSelect,
+    pub seed: u64,
+    pub method: Method,
+    pub interrupted: bool,
+    pub mean_rgb: [f64; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dtf: Option<DtfStats>,
+}
+
+/// DTF's share of the statistics.
+#[derive(Clone, Debug, Serialize)]
+pub struct DtfStats {
+    pub n: u32,
+    pub average_n: f64,
+    pub phase1_seconds: f64,
+    pub phase2_seconds: f64,
+    pub filter_seconds: f64,
+    pub filter_share: f64,
+    pub average_region: f64,
+    pub params: DtfParams,
+}
+
+/// A finished render.
+pub struct Rendered {
+    /// The displayed image (plain: the film's values; dtf: the combined image).
+    pub image: RgbImage,
+    /// All samples taken (for dtf: both phases merged), for AOVs and film files.
+    pub film: Film,
+    pub stats: RenderStats,
+    /// DTF's phases and maps (`--dtf-layers`).
+    pub dtf: Option<DtfRun>,
+    /// Things the user should know (the scene's warnings, capped threads, a black image).
+    pub warnings: Vec<String>,
+}
+
+/// A thread pool of the requested size, capped at `MAX_THREADS_PER_CPU` x the CPUs.
+pub fn thread_pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, Option<String>), String> {
+    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut warning = None;
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = threads {
+        if t == 0 {
+            return Err("--threads: must be at least 1".into());
+        }
+        let cap = MAX_THREADS_PER_CPU * cpus;
+        let t = if t > cap {
+            warning = Some(format!(
+                "--threads {t}: capped at {cap} ({MAX_THREADS_PER_CPU} x the {cpus} logical CPUs)"
+            ));
+            cap
+        } else {
+            t
+        };
+        b = b.num_threads(t);
+    }
+    let pool = b.build().map_err(|e| format!("--threads: {e}"))?;
+    Ok((pool, warning))
+}
+
+/// Load the job's scene and render it.
+pub fn render(job: &RenderJob, progress: &dyn Progress) -> Result<Rendered, String> {
+    job.validate()?;
+    let scene = crate::scene::load(&job.scene)?;
+    let mut r = render_scene(&scene, job, progress)?;
+    let mut w = scene.warnings.clone();
+    w.append(&mut r.warnings);
+    r.warnings = w;
+    Ok(r)
+}
+
+/// Render an already loaded scene as the job says (the job's `scene` only names it).
+pub fn render_scene(
+    scene: &Scene,
+    job: &RenderJob,
+    progress: &dyn Progress,
+) -> Result<Rendered, String> {
+    job.validate()?;
+    let set = job.settings(scene);
+    crate::film::check_resolution(set.width, set.height)?;
+    let (pool, thread_warning) = thread_pool(job.threads)?;
+    let mut warnings: Vec<String> = thread_warning.into_iter().collect();
+    let t_prep = std::time::Instant::now();
+    let integrator = pool.install(|| Integrator::prepare(scene, set.integrator))?;
+    let prepare_seconds = t_prep.elapsed().as_secs_f64();
+
+    let (film, image, counters, seconds, spp, interrupted, dtf_stats, dtf_run): (
+        Film,
+        RgbImage,
+        Counters,
+        f64,
+        u32,
+        bool,
+        Option<DtfStats>,
+        Option<DtfRun>,
+    ) = match job.method {
+        Method::Dtf => {
+            let params = &job.dtf;
+            let budget = match (job.time, job.spp) {
+                (Some(t), _) => DtfBudget::Time(t),
+                (None, Some(n)) => DtfBudget::Spp(n as f64),
+                (None, None) => DtfBudget::RelativeError,
+            };
+            let run = pool.install(|| {
+                pipeline::render_dtf(scene, &integrator, &set, params, budget, progress)
+            })?;
+            let mut film = run.independent.clone();
+            film.merge(&run.dependent);
+            let stats = DtfStats {
+                n: params.n,
+                average_n: run.average_n(),
+                phase1_seconds: run.phase1_seconds,
+                phase2_seconds: run.phase2_seconds,
+                filter_seconds: run.filter_seconds,
+                filter_share: run.filter_seconds / run.seconds,
+                average_region: run.out.region.iter().map(|&m| m as f64).sum::<f64>()
+                    / run.out.region.len() as f64,
+                params: params.clone(),
+            };
+            let spp = (film.total_samples() as f64 / (set.width as f64 * set.height as f64)).round()
+                as u32;
+            let image = run.out.combined.clone();
+            (
+                film,
+                image,
+                run.counters,
+                run.seconds,
+                spp,
+                false,
+                Some(stats),
+                Some(run),
+            )
+        }
+        Method::Plain => {
+            let budget = match (job.time, job.spp) {
+                (Some(t), _) => Budget::Time(t),
+                (None, Some(n)) => Budget::Spp(n),
+                (None, None) => Budget::Spp(scene.defaults.spp.unwrap_or(DEFAULT_SPP)),
+            };
+            let out = pool.install(|| {
+                pipeline::render(scene, &integrator, &set, budget, job.first_sample, progress)
+            })?;
+            let img = RgbImage::new(set.width, set.height, out.film.mean_rgb());
+            (
+                out.film,
+                img,
+                out.counters,
+                out.seconds,
+                out.spp,
+                out.interrupted,
+                None,
+                None,
+            )
+        }
+    };
+    let rej = film.rejected;
+    if rej.total() > 0 {
+        warnings.push(format!(
+            "rejected {} samples ({} NaN, {} infinite); they are not in the image",
+            rej.total(),
+            rej.nan,
+            rej.infinite
+        ));
+    }
+    // (a scene without emitters has said so when it was loaded)
+    if !interrupted
+        && !scene.lights.is_empty()
+        && film.total_samples() > 0
+        && image.data.iter().all(|p| *p == [0.0; 3])
+    {
+        warnings.push(
+            "the image is all black: check that the camera looks at the scene (--camera) and \
+             that the emitters face what it sees (an emitter shines only on its \
+             counter-clockwise side)"
+                .to_string(),
+        );
+    }
+    let stats = RenderStats {
+        scene: scene.info.name.clone(),
+        width: set.width,
+        height: set.height,
+        spp,
+        first_sample: job.first_sample,
+        seconds,
+        paths: counters.paths,
+        rays: counters.rays,
+        paths_per_second: counters.paths as f64 / seconds,
+        rays_per_second: counters.rays as f64 / seconds,
+        bvh_build_seconds: scene.info.bvh_seconds,
+        load_seconds: scene.info.load_seconds,
+        prepare_seconds,
+        rejected_samples: rej.total(),
+        rejected_nan: rej.nan,
+        rejected_infinite: rej.infinite,
+        threads: pool.current_num_threads(),
+        spectral: name(&set.spectral),
+        sampler: job.sampler,
+        dependent: job.dependent,
+        max_depth: set.integrator.max_depth,
+        integrator: job.integrator,
+        rr: job.roulette.mode,
+        rr_weight: job.roulette.weight,
+        rr_min_depth: job.roulette.min_depth,
+        bsdf_select: job.roulette.select,
+        seed: job.seed,
+        method: job.method,
+        interrupted,
+        mean_rgb: image.mean(),
+        dtf: dtf_stats,
+    };
+    Ok(Rendered {
+        image,
+        film,
+        stats,
+        dtf: dtf_run,
+        warnings,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrator::{BsdfSelect, RrMode, RrWeight};
+
+    /// The defaults, as documented in the README and `--help`: written once (clap
+    /// attributes), read by the CLI, the library's `Default` and serde alike.
+    #[test]
+    fn defaults_are_the_documented_ones_everywhere() {
+        let j = RenderJob::default();
+        assert_eq!(j.method, Method::Plain);
+        assert_eq!(j.integrator, IntegratorKind::Path);
+        assert_eq!(j.spectral, SpectralMode::Rgb);
+        assert_eq!(j.sampler, SamplerKind::Random);
+        assert_eq!(
+            (j.seed, j.first_sample, j.spp, j.time, j.res),
+            (0, 0, None, None, None)
+        );
+        assert_eq!(j.roulette.mode, RrMode::Classic);
+        assert_eq!(j.roulette.weight, RrWeight::Luminance);
+        assert_eq!(j.roulette.select, BsdfSelect::Mixture);
+        assert_eq!(j.roulette.min_depth, 0);
+        assert_eq!(j.dtf.n, 50);
+        assert_eq!(j.dtf.eps_r, 0.03);
+        assert_eq!(j.dtf.categories, vec![0, 1, 10, 20, 50, 100, 200, 500]);
+        assert!(j.dtf.cost_aware);
+        assert_eq!(j.dtf, DtfParams::default());
+        assert_eq!(j.roulette, Roulette::default());
+        // the CLI: `kalos render cornell` is the library's job for cornell
+        use clap::Parser;
+        let cli = crate::cli::Cli::try_parse_from(["kalos", "render", "cornell"]).unwrap();
+        let crate::cli::Command::Render(a) = cli.command else {
+            panic!("not a render")
+        };
+        assert_eq!(a.job(), RenderJob::new("cornell"));
+        // serde: an empty object is the default job; a round trip is the identity
+        let empty: RenderJob = serde_json::from_str("{}").unwrap();
+        assert_eq!(empty, RenderJob::default());
+        let mut k = RenderJob::new("room");
+        k.roulette.mode = RrMode::SpectralEstimate;
+        k.spectral = SpectralMode::Bands16;
+        k.dtf.allocation = crate::filter::dtf::Allocation::RelMse;
+        k.res = Some((3, 4));
+        let back: RenderJob = serde_json::from_str(&serde_json::to_string(&k).unwrap()).unwrap();
+        assert_eq!(back, k);
+        // serde spells choices as the CLI does
+        let v = serde_json::to_value(&k).unwrap();
+        assert_eq!(v["roulette"]["mode"], "spectral-estimate");
+        assert_eq!(v["spectral"], "16");
+        assert!(serde_json::from_str::<RenderJob>(r#"{"sppp": 3}"#).is_err());
+    }
+
+    #[test]
+    fn key_ignores_the_sample_range_only() {
+        let mut a = RenderJob::new("cornell");
+        let mut b = a.clone();
+        a.first_sample = 32;
+        b.spp = Some(7);
+        b.threads = Some(3);
+        assert_eq!(a.key(), b.key());
+        b.seed = 1;
+        assert_ne!(a.key(), b.key());
+    }
+}

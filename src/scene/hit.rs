@@ -1,0 +1,61 @@
+//! The hit record: a ray's closest hit with everything shading needs (position, geometric
+//! and shading normals, texture coordinates, barycentrics), from `Scene::intersect`.
+
+use super::Scene;
+use crate::math::{Ray, Vec2, Vec3};
+
+/// A ray's hit with everything shading needs.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    pub p: Vec3,
+    /// Unit geometric normal from the winding (counter-clockwise side).
+    pub ng: Vec3,
+    /// Unit shading normal, in the hemisphere of `ng`.
+    pub ns: Vec3,
+    pub uv: Vec2,
+    /// Barycentrics of the hit in its triangle: p = (1 - b1 - b2) v0 + b1 v1 + b2 v2.
+    pub b1: f32,
+    pub b2: f32,
+    pub prim: u32,
+    pub t: f32,
+}
+
+impl Scene {
+    /// The closest hit along `ray` before `t_max`, with the surface information.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
+        let h = self.bvh.intersect(ray, t_max)?;
+        let i = h.prim as usize;
+        let t = &self.tris[i];
+        let b0 = 1.0 - h.b1 - h.b2;
+        let p = t[0] * b0 + t[1] * h.b1 + t[2] * h.b2;
+        let ng = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+        let ns = match &self.normals[i] {
+            Some(n) => {
+                let s = (n[0] * b0 + n[1] * h.b1 + n[2] * h.b2).normalize_or_zero();
+                if s == Vec3::ZERO {
+                    ng
+                } else if s.dot(ng) < 0.0 {
+                    -s
+                } else {
+                    s
+                }
+            }
+            None => ng,
+        };
+        let uv = match &self.uvs[i] {
+            Some(uv) => uv[0] * b0 + uv[1] * h.b1 + uv[2] * h.b2,
+            None => Vec2::new(h.b1, h.b2),
+        };
+        Some(SurfaceHit {
+            p,
+            ng,
+            ns,
+            uv,
+            b1: h.b1,
+            b2: h.b2,
+            prim: h.prim,
+            t: h.t,
+        })
+    }
+}
