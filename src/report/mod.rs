@@ -155,12 +155,22 @@ pub fn side_by_side(
 ) -> Result<(), String> {
     register_font();
     let zoom = zoom.max(1);
-    let tw = tiles.iter().map(|t| t.1.width).max().unwrap_or(1) * zoom;
-    let th = tiles.iter().map(|t| t.1.height).max().unwrap_or(1) * zoom;
-    let label_h = 28;
-    let gap = 6;
-    let n = tiles.len().max(1) as u32;
-    let size = (n * tw + (n + 1) * gap, th + label_h + 2 * gap);
+    let (w, h) = (
+        tiles.iter().map(|t| t.1.width).max().unwrap_or(1),
+        tiles.iter().map(|t| t.1.height).max().unwrap_or(1),
+    );
+    let full = side_by_side_size(tiles.len(), w, h, zoom);
+    if full.0.max(full.1) > MAX_SIDE_BY_SIDE {
+        return Err(format!(
+            "{}: the side-by-side image would be {}x{} pixels, more than {MAX_SIDE_BY_SIDE} on a side: use a smaller crop or zoom",
+            path.display(),
+            full.0,
+            full.1
+        ));
+    }
+    let (tw, th) = (w * zoom, h * zoom);
+    let gap = SIDE_BY_SIDE_GAP;
+    let size = (full.0 as u32, full.1 as u32);
     let root = BitMapBackend::new(path, size).into_drawing_area();
     let e = |e: DrawingAreaErrorKind<_>| format!("{}: {e}", path.display());
     root.fill(&WHITE).map_err(e)?;
@@ -229,4 +239,20 @@ mod tests {
         assert!(back.width > 24);
         std::fs::remove_dir_all(&dir).ok();
     }
+}
+
+/// The largest side, in pixels, of a [`side_by_side`] image (16384: 768 MiB of RGB at
+/// most): a crop zoomed without bound would take the machine's memory.
+pub const MAX_SIDE_BY_SIDE: u64 = 16384;
+const SIDE_BY_SIDE_LABEL: u32 = 28;
+const SIDE_BY_SIDE_GAP: u32 = 6;
+
+/// (width, height) in pixels of the [`side_by_side`] image of `n` tiles of at most
+/// `w` x `h` pixels each, scaled by `zoom` (in u64: no overflow for any input).
+pub fn side_by_side_size(n: usize, w: u32, h: u32, zoom: u32) -> (u64, u64) {
+    let (n, zoom, gap) = (n.max(1) as u64, zoom.max(1) as u64, SIDE_BY_SIDE_GAP as u64);
+    (
+        n * w as u64 * zoom + (n + 1) * gap,
+        h as u64 * zoom + SIDE_BY_SIDE_LABEL as u64 + 2 * gap,
+    )
 }
