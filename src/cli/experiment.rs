@@ -442,7 +442,7 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
             let cached = out.join("reference.exr");
             let key_file = out.join("reference.key");
             let img = if cached.exists()
-                && std::fs::read_to_string(&key_file).ok().as_deref() == Some(key.as_str())
+                && crate::input::read_text(&key_file).ok().as_deref() == Some(key.as_str())
             {
                 read_image(&cached)?
             } else {

@@ -166,7 +166,6 @@ pub fn srgb_decode(v: f32) -> f32 {
 }
 
 fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), String> {
-    use image::ImageEncoder;
     let k = 2f32.powf(exposure);
     let mut buf = Vec::with_capacity(img.data.len() * 3);
     for p in &img.data {
@@ -174,13 +173,25 @@ fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), String> {
             buf.push((srgb_encode(v * k).clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
         }
     }
-    // encode in memory, then one write whose error is seen (image::save_buffer's
-    // BufWriter is flushed on drop, where a full disk goes unnoticed)
+    encode_png(path, img.width, img.height, &buf)
+}
+
+/// Encode 8-bit RGB in memory, then one write whose error is seen (image::save_buffer's
+/// BufWriter is flushed on drop, where a full disk goes unnoticed).
+fn encode_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), String> {
+    use image::ImageEncoder;
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(&buf, img.width, img.height, image::ExtendedColorType::Rgb8)
+        .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
         .map_err(|e| e.to_string())?;
     std::fs::write(path, png).map_err(|e| e.to_string())
+}
+
+/// Write 8-bit sRGB pixels (row-major RGB) as a PNG, reporting any write error (plots
+/// and side-by-side images drawn into memory).
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), String> {
+    encode_png(path, width, height, rgb)
+        .map_err(|e| format!("{}: cannot write image: {e}", path.display()))
 }
 
 /// Largest number of pixels an image read may have: the input limit over 12 bytes (one
