@@ -861,3 +861,31 @@ fn kd_plus_ks_above_one_is_scaled_to_one_with_one_warning() {
         assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
     }
 }
+
+#[test]
+fn toml_material_overrides_warn_like_mtl_values() {
+    let dir = temp_dir("toml-notes");
+    write(&dir, "square.obj", SQUARE);
+    write(&dir, "square.mtl", SQUARE_MTL);
+    let toml = write(
+        &dir,
+        "n.toml",
+        "[[objects]]\nfile = \"square.obj\"\n[materials.white]\nillum = 99\nkd = [0.9, 0.9, 0.9]\nks = [0.3, 0.3, 0.3]\n",
+    );
+    let s = scene::load(toml.to_str().unwrap()).unwrap();
+    let w = warnings_naming(&s.warnings, "white");
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    assert!(
+        w[0].contains("illum 99") && w[0].contains("n.toml"),
+        "{w:?}"
+    );
+    assert!(w[0].contains("scaled"), "{w:?}");
+    let toml = write(
+        &dir,
+        "g.toml",
+        "[[objects]]\nfile = \"square.obj\"\n[materials.white]\nillum = 7\nni = 0\n",
+    );
+    let s = scene::load(toml.to_str().unwrap()).unwrap();
+    let w = warnings_naming(&s.warnings, "white");
+    assert!(w.len() == 1 && w[0].contains("Ni 0"), "{:?}", s.warnings);
+}

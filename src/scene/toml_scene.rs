@@ -178,6 +178,17 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             }
             if let Some(v) = ov.illum {
                 m.illum = v;
+                if v > 10 {
+                    m.notes.push(format!(
+                        "illum {v} (from {file} materials.{name}) is not an MTL illumination model (0 to 10): rendered as diffuse + glossy from Kd and Ks"
+                    ));
+                }
+            }
+            if (ov.illum.is_some() || ov.ni.is_some()) && m.illum == 7 && m.ni <= 0.0 {
+                m.notes.push(format!(
+                    "glass (illum 7) with Ni {} (from {file} materials.{name}): an index of refraction must be positive; rendered with 1.5",
+                    m.ni
+                ));
             }
         }
         if !found {
