@@ -636,3 +636,44 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stricter validation must still accept every experiment the project ships.
+    #[test]
+    fn the_projects_experiment_files_pass_validation() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/results");
+        let mut n = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let p = entry.unwrap().path();
+            if p.extension().and_then(|e| e.to_str()) != Some("toml") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&p).unwrap();
+            let ex: ExperimentFile = toml::from_str(&text).unwrap();
+            let spec = if crate::scene::builtin::NAMES.contains(&ex.scene.as_str()) {
+                ex.scene.clone()
+            } else {
+                dir.join(&ex.scene).display().to_string()
+            };
+            let res = crate::scene::load_desc(&spec).unwrap().defaults.res;
+            let name = p.display().to_string();
+            let plan = validate(&ex, &name, &spec, res).unwrap_or_else(|e| panic!("{e}"));
+            assert!(plan.zoom >= 1 && plan.repeats >= 1, "{name}");
+            n += 1;
+        }
+        assert!(n >= 5, "{n} experiment files");
+    }
+
+    #[test]
+    fn own_options_are_refused_with_who_sets_them() {
+        let e = refuse_own_options("--rr off --spp=4", "x.toml: config a", &[]).unwrap_err();
+        assert!(e.contains("--spp is set by [budgets]"), "{e}");
+        let e = refuse_own_options("-q", "x.toml", &[]).unwrap_err();
+        assert!(e.contains("-q is set by the experiment"), "{e}");
+        assert!(refuse_own_options("--seed 7", "x.toml: [reference]", &["--seed"]).is_ok());
+        assert!(refuse_own_options("--sppx 3 --rr classic", "x.toml", &[]).is_ok());
+    }
+}
