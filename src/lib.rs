@@ -13,6 +13,7 @@ pub mod cli;
 pub mod film;
 pub mod filter;
 pub mod image_io;
+pub mod input;
 pub mod integrator;
 pub mod light;
 pub mod material;

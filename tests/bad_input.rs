@@ -298,3 +298,315 @@ fn info_counts_skipped_zero_area_faces() {
     assert_eq!(code, 0);
     assert!(out.contains("\"skipped_degenerate\": 2"), "{out}");
 }
+
+// ---- issue 15: hostile and careless input -------------------------------------------
+
+/// A little-endian PFM (negative scale) of `w` x `h` RGB pixels, all of value `v` except
+/// the first, which is `first`.
+fn pfm(w: u32, h: u32, v: f32, first: f32) -> Vec<u8> {
+    let mut out = format!("PF\n{w} {h}\n-1.0\n").into_bytes();
+    for i in 0..w * h * 3 {
+        let x = if i < 3 { first } else { v };
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    out
+}
+
+#[test]
+fn compare_refuses_nan_infinite_and_empty_images_naming_the_file() {
+    let d = temp_dir("compare");
+    let good = write(&d, "good.pfm", pfm(2, 2, 0.5, 0.5));
+    let also = write(&d, "also.pfm", pfm(2, 2, 0.5, 0.25));
+    let (code, out, err) = kalos(&["compare", &also, &good]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("rmse"), "{out}");
+    let bad = [
+        ("nan.pfm", pfm(2, 2, 0.5, f32::NAN), "NaN"),
+        ("allnan.pfm", pfm(2, 2, f32::NAN, f32::NAN), "NaN"),
+        ("inf.pfm", pfm(2, 2, 0.5, f32::INFINITY), "infinite"),
+        ("empty.pfm", pfm(0, 0, 0.0, 0.0), "0x0"),
+    ];
+    for (name, bytes, what) in bad {
+        let p = write(&d, name, bytes);
+        for args in [["compare", &p, &good], ["compare", &good, &p]] {
+            let (code, _, err) = kalos(&args);
+            assert_one_line_error(name, code, &err, 1, &[name, what]);
+        }
+    }
+}
+
+/// An experiment on an 8x8 Cornell box with one 1-spp budget; `top` goes before the
+/// tables, `reference` into [reference], `configs` after them.
+fn experiment_text(top: &str, reference: &str, configs: &str) -> String {
+    format!(
+        "scene = \"cornell\"\noptions = \"--res 8x8 --threads 1\"\n{top}\n\
+         [reference]\n{reference}\n\n[budgets]\nspp = [1]\n\n{configs}\n"
+    )
+}
+
+const ONE_CONFIG: &str = "[[config]]\nname = \"a\"\n";
+
+/// Run `kalos experiment` on `text`; it must fail with one line naming every needle,
+/// and create no output folder.
+#[track_caller]
+fn assert_experiment_refused(d: &Path, name: &str, text: &str, needles: &[&str]) {
+    let file = write(d, &format!("{name}.toml"), text);
+    let out = d.join(format!("{name}-out"));
+    let (code, _, err) = kalos(&["experiment", &file, "--out", out.to_str().unwrap(), "-q"]);
+    let mut all = vec![format!("{name}.toml")];
+    all.extend(needles.iter().map(|s| s.to_string()));
+    let all: Vec<&str> = all.iter().map(String::as_str).collect();
+    assert_one_line_error(name, code, &err, 1, &all);
+    assert!(!out.exists(), "{name}: the output folder was created");
+}
+
+#[test]
+fn experiment_files_with_contradictions_are_refused_naming_the_key() {
+    let d = temp_dir("experiments");
+    write(&d, "nan.pfm", pfm(8, 8, 0.5, f32::NAN));
+    write(&d, "small.pfm", pfm(4, 4, 0.5, 0.5));
+    let constant = "constant = 1.0";
+    let cases: Vec<(&str, String, Vec<&str>)> = vec![
+        (
+            "same-name",
+            experiment_text(
+                "",
+                constant,
+                "[[config]]\nname = \"a\"\n[[config]]\nname = \"a\"\noptions = \"--rr off\"\n",
+            ),
+            vec!["config", "\"a\""],
+        ),
+        (
+            "same-file-name",
+            experiment_text(
+                "",
+                constant,
+                "[[config]]\nname = \"a b\"\n[[config]]\nname = \"a_b\"\n",
+            ),
+            vec!["config", "a_b"],
+        ),
+        (
+            "image-and-constant",
+            experiment_text("", "image = \"nan.pfm\"\nconstant = 1.0", ONE_CONFIG),
+            vec!["[reference]", "image", "constant"],
+        ),
+        (
+            "spp-and-constant",
+            experiment_text("", "spp = 4\nconstant = 1.0", ONE_CONFIG),
+            vec!["[reference]", "spp", "constant"],
+        ),
+        (
+            "crop-outside",
+            experiment_text("crop = [4, 4, 8, 8]", constant, ONE_CONFIG),
+            vec!["crop", "8x8"],
+        ),
+        (
+            "crop-empty",
+            experiment_text("crop = [0, 0, 0, 4]", constant, ONE_CONFIG),
+            vec!["crop"],
+        ),
+        (
+            "zoom-zero",
+            experiment_text("zoom = 0", constant, ONE_CONFIG),
+            vec!["zoom"],
+        ),
+        (
+            "repeats-zero",
+            experiment_text("repeats = 0", constant, ONE_CONFIG),
+            vec!["repeats"],
+        ),
+        (
+            "spp-in-options",
+            experiment_text(
+                "",
+                constant,
+                "[[config]]\nname = \"a\"\noptions = \"--spp 0\"\n",
+            ),
+            vec!["config a", "--spp", "[budgets]"],
+        ),
+        (
+            "seed-in-options",
+            experiment_text(
+                "",
+                constant,
+                "[[config]]\nname = \"a\"\noptions = \"--seed 3\"\n",
+            ),
+            vec!["config a", "--seed", "repeats"],
+        ),
+        (
+            "nan-reference",
+            experiment_text("", "image = \"nan.pfm\"", ONE_CONFIG),
+            vec!["nan.pfm", "NaN"],
+        ),
+        (
+            "nan-constant",
+            experiment_text("", "constant = nan", ONE_CONFIG),
+            vec!["[reference]", "constant"],
+        ),
+        (
+            "reference-size",
+            experiment_text("", "image = \"small.pfm\"", ONE_CONFIG),
+            vec!["small.pfm", "4x4", "8x8"],
+        ),
+    ];
+    for (name, text, needles) in cases {
+        assert_experiment_refused(&d, name, &text, &needles);
+    }
+}
+
+#[test]
+fn experiment_side_by_side_size_is_limited() {
+    let d = temp_dir("zoom");
+    let text = experiment_text(
+        "crop = [0, 0, 8, 8]\nzoom = 100000",
+        "constant = 1.0",
+        ONE_CONFIG,
+    );
+    assert_experiment_refused(&d, "huge-zoom", &text, &["zoom", "side-by-side"]);
+}
+
+/// Run kalos, killing it (and failing) if it takes more than `secs` seconds.
+fn kalos_within(secs: u64, args: &[&str]) -> (i32, String, String) {
+    use std::io::Read;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kalos"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run kalos");
+    let t0 = std::time::Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            let (mut out, mut err) = (String::new(), String::new());
+            child
+                .stdout
+                .take()
+                .unwrap()
+                .read_to_string(&mut out)
+                .unwrap();
+            child
+                .stderr
+                .take()
+                .unwrap()
+                .read_to_string(&mut err)
+                .unwrap();
+            return (status.code().expect("killed by a signal"), out, err);
+        }
+        if t0.elapsed().as_secs() >= secs {
+            child.kill().ok();
+            child.wait().ok();
+            panic!("kalos {args:?} did not finish within {secs} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn special_files_are_named_for_what_they_are_and_never_read() {
+    use std::os::unix::fs::symlink;
+    let d = temp_dir("special");
+    let mkfifo = |name: &str| {
+        let p = d.join(name);
+        let ok = Command::new("mkfifo").arg(&p).status().unwrap().success();
+        assert!(ok, "mkfifo {}", p.display());
+        p.to_str().unwrap().to_string()
+    };
+    let fifo_toml = mkfifo("fifo.toml");
+    let fifo_obj = mkfifo("fifo.obj");
+    mkfifo("fifo.mtl");
+    mkfifo("fifo.png");
+    let fifo_exr = mkfifo("fifo.exr");
+    std::fs::create_dir(d.join("dir.obj")).unwrap();
+    std::fs::create_dir(d.join("dir.toml")).unwrap();
+    symlink("/dev/zero", d.join("zero.toml")).unwrap();
+    symlink("/dev/zero", d.join("zero.obj")).unwrap();
+    symlink("/dev/zero", d.join("zero.pfm")).unwrap();
+    let s = |n: &str| d.join(n).to_str().unwrap().to_string();
+    let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl t\nf 1/1 2/2 3/3\n";
+    let mtl_zero = write(&d, "mz.obj", format!("mtllib /dev/zero\n{tri}"));
+    let mtl_fifo = write(&d, "mf.obj", format!("mtllib fifo.mtl\n{tri}"));
+    write(&d, "t.mtl", "newmtl t\nmap_Kd fifo.png\n");
+    let tex_fifo = write(&d, "tf.obj", format!("mtllib t.mtl\n{tri}"));
+    let toml_obj =
+        |name: &str, obj: &str| write(&d, name, format!("[[objects]]\nfile = \"{obj}\"\n"));
+    let toml_fifo = toml_obj("of.toml", "fifo.obj");
+    let toml_dir = toml_obj("od.toml", "dir.obj");
+    let toml_zero = toml_obj("oz.toml", "zero.obj");
+    let good = write(&d, "good.pfm", pfm(2, 2, 0.5, 0.5));
+    let cases: Vec<(Vec<String>, Vec<&str>)> = vec![
+        (
+            vec!["info".into(), fifo_toml.clone()],
+            vec!["fifo.toml", "FIFO"],
+        ),
+        (vec!["info".into(), fifo_obj], vec!["fifo.obj", "FIFO"]),
+        (
+            vec!["info".into(), s("dir.obj")],
+            vec!["dir.obj", "directory"],
+        ),
+        (
+            vec!["info".into(), s("dir.toml")],
+            vec!["dir.toml", "directory"],
+        ),
+        (
+            vec!["info".into(), s("zero.toml")],
+            vec!["zero.toml", "character device"],
+        ),
+        (
+            vec!["info".into(), s("zero.obj")],
+            vec!["zero.obj", "character device"],
+        ),
+        (
+            vec!["info".into(), mtl_zero],
+            vec!["/dev/zero", "character device"],
+        ),
+        (vec!["info".into(), mtl_fifo], vec!["fifo.mtl", "FIFO"]),
+        (vec!["info".into(), tex_fifo], vec!["fifo.png", "FIFO"]),
+        (vec!["info".into(), toml_fifo], vec!["fifo.obj", "FIFO"]),
+        (vec!["info".into(), toml_dir], vec!["dir.obj", "directory"]),
+        (
+            vec!["info".into(), toml_zero],
+            vec!["zero.obj", "character device"],
+        ),
+        (
+            vec!["compare".into(), fifo_exr, good.clone()],
+            vec!["fifo.exr", "FIFO"],
+        ),
+        (
+            vec!["compare".into(), good, s("zero.pfm")],
+            vec!["zero.pfm", "character device"],
+        ),
+        (
+            vec!["experiment".into(), fifo_toml],
+            vec!["fifo.toml", "FIFO"],
+        ),
+    ];
+    for (args, needles) in cases {
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, _, err) = kalos_within(30, &a);
+        assert_one_line_error(&args.join(" "), code, &err, 1, &needles);
+    }
+}
+
+#[test]
+fn a_valid_tiny_experiment_still_runs() {
+    let d = temp_dir("experiment-ok");
+    write(&d, "ref.pfm", pfm(8, 8, 0.5, 0.5));
+    let text = experiment_text(
+        "repeats = 1\ncrop = [2, 2, 4, 4]\nzoom = 2",
+        "image = \"ref.pfm\"",
+        "[[config]]\nname = \"plain path\"\n[[config]]\nname = \"no rr\"\noptions = \"--rr off\"\n",
+    );
+    let file = write(&d, "ok.toml", text);
+    let out = d.join("ok-out");
+    let (code, _, err) = kalos(&["experiment", &file, "--out", out.to_str().unwrap(), "-q"]);
+    assert_eq!(code, 0, "{err}");
+    for f in [
+        "results.csv",
+        "side-by-side.png",
+        "plain_path-1.exr",
+        "no_rr-1.exr",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing: {err}");
+    }
+}

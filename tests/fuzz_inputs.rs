@@ -1,6 +1,9 @@
 //! Hand-rolled fuzzing: randomly mutated OBJ, MTL and TOML text (lines deleted,
-//! duplicated, swapped, numbers replaced by huge/negative/NaN/garbage tokens, truncated)
-//! must load or fail with an error, never panic.
+//! duplicated, swapped, numbers replaced by huge/negative/NaN/garbage tokens, truncated,
+//! a byte-order mark, CRLF or CR-only line ends) must load or fail with an error, never
+//! panic. And the shapes of input real tools write: byte-order marks and any line ends
+//! load as the plain file does, names with spaces load, random mirroring transforms keep
+//! every front side, and special files (FIFOs, directories, devices) are refused at once.
 
 use glam::Mat4;
 use kalos::scene::obj::{load_obj_text, MtlSource};
@@ -64,6 +67,11 @@ const TOKENS: &[&str] = &[
     "é",
     "\t",
     "\r",
+    "\u{feff}",
+    "-s",
+    "-o 1 2",
+    "-clamp",
+    "my tex.png",
 ];
 
 /// Apply 1..4 random mutations to `text`.
@@ -113,8 +121,13 @@ fn mutate(text: &str, rng: &mut Rng) -> String {
             _ => {}
         }
     }
-    let sep = if rng.below(4) == 0 { "\r\n" } else { "\n" };
-    lines.join(sep)
+    let sep = match rng.below(6) {
+        0 => "\r\n",
+        1 => "\r",
+        _ => "\n",
+    };
+    let bom = if rng.below(5) == 0 { "\u{feff}" } else { "" };
+    format!("{bom}{}", lines.join(sep))
 }
 
 const OBJ: &str =
@@ -216,4 +229,217 @@ scale = 0.5\n\n[materials.white]\nkd = [0.8, 0.8, 0.8]\nillum = 2\n";
             }
         });
     }
+}
+
+/// The seed OBJ loaded with `mtl`, as (positions, normals, uvs, material names).
+type Loaded = (
+    Vec<[glam::Vec3; 3]>,
+    Vec<Option<[glam::Vec3; 3]>>,
+    Vec<Option<[glam::Vec2; 3]>>,
+    Vec<String>,
+);
+
+fn load_plain(obj: &str, mtl: &'static str, xf: Mat4) -> Result<Loaded, String> {
+    let lib = move |name: &str| (name == "m.mtl").then_some(mtl);
+    let mut d = SceneDesc::default();
+    load_obj_text(obj, "fuzz.obj", MtlSource::Embedded(&lib), xf, &mut d)?;
+    let names = d
+        .material
+        .iter()
+        .map(|&m| d.materials[m as usize].name.clone())
+        .collect();
+    Ok((d.positions, d.normals, d.uvs, names))
+}
+
+/// The text with a byte-order mark and/or other line ends.
+fn variants(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for sep in ["\n", "\r\n", "\r"] {
+        for bom in ["", "\u{feff}"] {
+            out.push(format!(
+                "{bom}{}",
+                text.lines().collect::<Vec<_>>().join(sep)
+            ));
+        }
+    }
+    out
+}
+
+#[test]
+fn boms_and_any_line_ends_load_as_the_plain_file() {
+    let plain = load_plain(OBJ, MTL, Mat4::IDENTITY).unwrap();
+    assert!(plain.0.len() >= 5, "{}", plain.0.len());
+    for obj in variants(OBJ) {
+        for mtl in variants(MTL) {
+            let mtl: &'static str = Box::leak(mtl.into_boxed_str());
+            let got = load_plain(&obj, mtl, Mat4::IDENTITY)
+                .unwrap_or_else(|e| panic!("{obj:?} with {mtl:?}: {e}"));
+            assert!(got == plain, "{obj:?} with {mtl:?} loads differently");
+        }
+    }
+    // and the mutated files: BOM / line ends never change what a mutation does
+    let mut rng = Rng(0x1234_5678_9abc_def1);
+    for _ in 0..100 {
+        let m = mutate(OBJ, &mut rng);
+        let base = m
+            .trim_start_matches('\u{feff}')
+            .replace("\r\n", "\n")
+            .replace('\r', "\n");
+        let a = load_plain(&base, MTL, Mat4::IDENTITY);
+        for v in variants(&base) {
+            let b = load_plain(&v, MTL, Mat4::IDENTITY);
+            match (&a, &b) {
+                (Ok(x), Ok(y)) => assert!(x == y, "{v:?}"),
+                (Err(x), Err(y)) => assert_eq!(x, y, "{v:?}"),
+                _ => panic!("{v:?}: {a:?} vs {b:?}", a = a.is_ok(), b = b.is_ok()),
+            }
+        }
+    }
+}
+
+#[test]
+fn random_mirroring_transforms_keep_every_front_side() {
+    let plain = load_plain(OBJ, MTL, Mat4::IDENTITY).unwrap();
+    let mut rng = Rng(0x0bad_cafe_dead_f00d);
+    let mut u = || (rng.next() >> 11) as f32 / (1u64 << 53) as f32;
+    let mut mirrored = 0;
+    for _ in 0..200 {
+        let sign = |x: f32| if x < 0.5 { -1.0 } else { 1.0 };
+        let s = glam::Vec3::new(
+            sign(u()) * (0.1 + 3.0 * u()),
+            sign(u()) * (0.1 + 3.0 * u()),
+            sign(u()) * (0.1 + 3.0 * u()),
+        );
+        let q = glam::Quat::from_euler(glam::EulerRot::ZYX, 6.3 * u(), 6.3 * u(), 6.3 * u());
+        let t = glam::Vec3::new(u(), u(), u()) * 10.0 - 5.0;
+        let xf = Mat4::from_scale_rotation_translation(s, q, t);
+        let det = glam::Mat3::from_mat4(xf).determinant();
+        mirrored += (det < 0.0) as usize;
+        let nxf = glam::Mat3::from_mat4(xf).inverse().transpose();
+        let got = load_plain(OBJ, MTL, xf).unwrap();
+        assert_eq!(got.0.len(), plain.0.len());
+        for (k, (a, b)) in plain.0.iter().zip(&got.0).enumerate() {
+            let front = |t: &[glam::Vec3; 3]| (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+            // the front side follows the transformed normal
+            let want = (nxf * front(a)).normalize();
+            assert!(front(b).dot(want) > 0.99, "det {det}: triangle {k}");
+            // the same corners, in some order
+            for v in a {
+                let p = xf.transform_point3(*v);
+                assert!(b
+                    .iter()
+                    .any(|w| (p - *w).length() < 1e-3 * (1.0 + p.length())));
+            }
+            // shading normals stay on the side of the front they were on
+            if let (Some(pn), Some(gn)) = (plain.1[k], got.1[k]) {
+                let pos = |ns: [glam::Vec3; 3], f: glam::Vec3| {
+                    ns.iter().filter(|n| n.dot(f) > 0.0).count()
+                };
+                assert_eq!(
+                    pos(pn, front(a)),
+                    pos(gn, front(b)),
+                    "det {det}: triangle {k}"
+                );
+            }
+        }
+    }
+    assert!((60..=140).contains(&mirrored), "{mirrored} of 200 mirrored");
+}
+
+#[test]
+fn names_with_spaces_load() {
+    let dir = std::env::temp_dir().join(format!("kalos-fuzz-spaces-{}", std::process::id()));
+    let sub = dir.join("a dir");
+    std::fs::create_dir_all(&sub).unwrap();
+    let png = [255u8, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255];
+    image::RgbImage::from_raw(2, 2, png.to_vec())
+        .unwrap()
+        .save(sub.join("my  tex.png"))
+        .unwrap();
+    std::fs::write(
+        sub.join("my mats.mtl"),
+        "\u{feff}newmtl wood grain\r\nKd 0.5 0.5 0.5\r\nmap_Kd -s 1 1 1 -clamp on my  tex.png\r\n",
+    )
+    .unwrap();
+    std::fs::write(
+        sub.join("my scene.obj"),
+        "mtllib my mats.mtl\rv 0 0 0\rv 1 0 0\rv 0 1 0\rvt 0 0\rvt 1 0\rvt 0 1\r\
+         usemtl wood grain\rf 1/1 2/2 3/3\r",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("my scene.toml"),
+        "[[objects]]\nfile = \"a dir/my scene.obj\"\nscale = [-1, 1, 1]\n",
+    )
+    .unwrap();
+    let s = kalos::scene::load(dir.join("my scene.toml").to_str().unwrap()).unwrap();
+    assert_eq!(s.tris.len(), 1);
+    assert_eq!(s.textures.len(), 1);
+    assert_eq!(s.materials[s.tri_material[0] as usize].name, "wood grain");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Run `f` on another thread; fail if it takes more than `secs` seconds (a blocking read).
+fn within<T: Send + 'static>(secs: u64, what: &str, f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(std::time::Duration::from_secs(secs))
+        .unwrap_or_else(|_| panic!("{what}: did not return within {secs} s"))
+}
+
+#[cfg(unix)]
+#[test]
+fn special_files_are_refused_without_reading() {
+    use std::os::unix::fs::symlink;
+    let dir = std::env::temp_dir().join(format!("kalos-fuzz-special-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let kinds: [(&str, &str); 4] = [
+        ("fifo", "FIFO"),
+        ("dir", "directory"),
+        ("zero", "character device"),
+        ("null", "character device"),
+    ];
+    for ext in ["obj", "toml", "mtl", "png", "exr", "pfm"] {
+        for (kind, what) in kinds {
+            let p = dir.join(format!("{kind}.{ext}"));
+            match kind {
+                "fifo" => assert!(std::process::Command::new("mkfifo")
+                    .arg(&p)
+                    .status()
+                    .unwrap()
+                    .success()),
+                "dir" => std::fs::create_dir(&p).unwrap(),
+                k => symlink(format!("/dev/{k}"), &p).unwrap(),
+            }
+            let name = p.file_name().unwrap().to_str().unwrap().to_string();
+            // every reader: scene files, MTL through an OBJ, textures, images
+            let e = match ext {
+                "obj" | "toml" => {
+                    let spec = p.to_str().unwrap().to_string();
+                    within(10, &name, move || kalos::scene::load_desc(&spec).err())
+                }
+                "mtl" => {
+                    let obj = dir.join(format!("uses-{kind}.obj"));
+                    std::fs::write(&obj, format!("mtllib {name}\nv 0 0 0\n")).unwrap();
+                    let spec = obj.to_str().unwrap().to_string();
+                    within(10, &name, move || kalos::scene::load_desc(&spec).err())
+                }
+                "png" => {
+                    let q = p.clone();
+                    within(10, &name, move || kalos::scene::Texture::load(&q).err())
+                }
+                _ => {
+                    let q = p.clone();
+                    within(10, &name, move || kalos::image_io::read_image(&q).err())
+                }
+            };
+            let e = e.unwrap_or_else(|| panic!("{name}: read without an error"));
+            assert!(e.contains(&name) && e.contains(what), "{name}: {e}");
+            assert!(!e.contains('\n'), "{e}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

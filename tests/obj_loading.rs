@@ -559,3 +559,333 @@ fn missing_and_bad_files_are_errors_naming_the_file() {
     let e = scene::load_desc(bin.to_str().unwrap()).unwrap_err();
     assert!(e.contains("x.obj"), "{e}");
 }
+
+// ---- issue 15: hostile and careless input -------------------------------------------
+
+/// Geometric normal of a triangle from its winding: (v1 - v0) x (v2 - v0).
+fn winding_normal(t: &[Vec3; 3]) -> Vec3 {
+    (t[1] - t[0]).cross(t[2] - t[0]).normalize()
+}
+
+/// A unit quad in z = 0, counter-clockwise seen from +z, with vn (0, 0, 1) at every corner,
+/// emitting towards +z (the front side).
+const FRONT_QUAD: &str = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\n\
+usemtl lamp\nf 1//1 2//1 3//1 4//1\n";
+const LAMP_ONLY: &str = "newmtl lamp\nKd 0 0 0\nKe 1 1 1\n";
+
+#[test]
+fn mirroring_transforms_keep_the_front_side_and_the_normals() {
+    // (transform, the quad's front normal after it): a mirror maps the front +z of the
+    // quad to the mirrored +z; pbrt flips the winding when a transform swaps handedness
+    let cases = [
+        (Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)), Vec3::Z),
+        (Mat4::from_scale(Vec3::new(1.0, 1.0, -1.0)), -Vec3::Z),
+        (Mat4::from_scale(Vec3::new(-1.0, -1.0, 1.0)), Vec3::Z), // a rotation: det > 0
+        (Mat4::from_scale(Vec3::new(-2.0, -3.0, -0.5)), -Vec3::Z),
+    ];
+    for (xf, front) in cases {
+        let f = move |name: &str| (name == "m.mtl").then_some(LAMP_ONLY);
+        let mut d = SceneDesc::default();
+        load_obj_text(FRONT_QUAD, "q.obj", MtlSource::Embedded(&f), xf, &mut d).unwrap();
+        assert_eq!(d.positions.len(), 2);
+        for (t, n) in d.positions.iter().zip(&d.normals) {
+            let g = winding_normal(t);
+            assert!(
+                g.dot(front) > 0.999,
+                "{xf:?}: winding normal {g} (front {front})"
+            );
+            for v in n.expect("vn given") {
+                assert!(
+                    v.dot(front) > 0.999,
+                    "{xf:?}: shading normal {v} (front {front})"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_mirrored_toml_object_still_lights_the_scene() {
+    // the lamp faces -z towards a floor at z = -1; mirrored in x it must still face -z
+    let dir = temp_dir("mirror");
+    write(
+        &dir,
+        "m.mtl",
+        "newmtl lamp\nKd 0 0 0\nKe 4 4 4\nnewmtl floor\nKd 0.5 0.5 0.5\n",
+    );
+    write(
+        &dir,
+        "lamp.obj",
+        "mtllib m.mtl\nv 0 0 0\nv 0 1 0\nv 1 1 0\nv 1 0 0\nusemtl lamp\nf 1 2 3 4\n",
+    );
+    write(
+        &dir,
+        "floor.obj",
+        "mtllib m.mtl\nv -5 -5 -1\nv 5 -5 -1\nv 5 5 -1\nv -5 5 -1\nusemtl floor\nf 1 2 3 4\n",
+    );
+    for scale in ["1", "[-1, 1, 1]"] {
+        let toml = write(
+            &dir,
+            "s.toml",
+            &format!(
+                "[[objects]]\nfile = \"floor.obj\"\n[[objects]]\nfile = \"lamp.obj\"\nscale = {scale}\n"
+            ),
+        );
+        let d = scene::load_desc(toml.to_str().unwrap()).unwrap();
+        for (t, &m) in d.positions.iter().zip(&d.material) {
+            if d.materials[m as usize].name == "lamp" {
+                let g = winding_normal(t);
+                assert!(g.z < -0.999, "scale {scale}: the lamp faces {g}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_byte_order_mark_is_not_part_of_the_first_line() {
+    // the first `v` must not be lost (every later index would shift)
+    let d = load_text("\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    assert_eq!(d.positions.len(), 1);
+    assert_eq!(d.positions[0][0], Vec3::ZERO);
+    // nor the mtllib (every material lost), nor the MTL's first newmtl
+    let d = load_with_mtl(
+        "\u{feff}mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+        "\u{feff}newmtl a\nKd 0.1 0.2 0.3\n",
+    )
+    .unwrap();
+    assert_eq!(d.materials[d.material[0] as usize].kd, [0.1, 0.2, 0.3]);
+    assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+    // and from files on disk
+    let dir = temp_dir("bom");
+    write(&dir, "b.mtl", "\u{feff}newmtl b\r\nKd 0.25 0.5 0.75\r\n");
+    let obj = write(
+        &dir,
+        "b.obj",
+        "\u{feff}mtllib b.mtl\r\nv 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nusemtl b\r\nf 1 2 3\r\n",
+    );
+    let d = scene::load_desc(obj.to_str().unwrap()).unwrap();
+    assert_eq!(d.materials[d.material[0] as usize].kd, [0.25, 0.5, 0.75]);
+    let toml = write(&dir, "b.toml", "\u{feff}[[objects]]\nfile = \"b.obj\"\n");
+    assert_eq!(
+        scene::load_desc(toml.to_str().unwrap())
+            .unwrap()
+            .positions
+            .len(),
+        1
+    );
+}
+
+#[test]
+fn old_mac_line_ends_are_line_ends() {
+    let d = load_with_mtl(
+        "mtllib m.mtl\rv 0 0 0\rv 1 0 0\rv 0 1 0\rusemtl a\rf 1 2 3\r",
+        "newmtl a\rKd 0.1 0.2 0.3\r",
+    )
+    .unwrap();
+    assert_eq!(d.positions.len(), 1);
+    assert_eq!(d.materials[d.material[0] as usize].kd, [0.1, 0.2, 0.3]);
+    // line numbers count CR-only lines too
+    let e = load_text("v 0 0 0\rv 1 0 0\r\rf 1 2 3\r").unwrap_err();
+    assert!(e.starts_with("test.obj:4:"), "{e}");
+}
+
+#[test]
+fn map_kd_file_names_with_spaces_after_options() {
+    let dir = Path::new("/d");
+    let cases = [
+        ("map_Kd my tex.png", "/d/my tex.png"),
+        ("map_Kd  my  tex.png  ", "/d/my  tex.png"),
+        ("map_Kd -s 1 1 1 my tex.png", "/d/my tex.png"),
+        ("map_Kd -s 2 -o 0.5 0.5 tex.png", "/d/tex.png"),
+        (
+            "map_Kd -clamp on -bm 0.5 -blendu off -blendv on my tex.png",
+            "/d/my tex.png",
+        ),
+        (
+            "map_Kd -mm 0 1 -texres 512 -imfchan l -type sphere -cc off -boost 2 a b.png",
+            "/d/a b.png",
+        ),
+        (
+            "map_Kd -o 1 -t 0.1 0.2 0.3 dir\\my tex.png",
+            "/d/dir/my tex.png",
+        ),
+        (
+            "map_Kd \"C:\\Textures\\my wood.png\"",
+            "/d/C:/Textures/my wood.png",
+        ),
+    ];
+    for (line, want) in cases {
+        let m = kalos::scene::mtl::parse_mtl(&format!("newmtl a\n{line}\n"), "x.mtl", dir)
+            .unwrap_or_else(|e| panic!("{line}: {e}"));
+        assert_eq!(m[0].map_kd.as_deref(), Some(Path::new(want)), "{line}");
+    }
+    for line in [
+        "map_Kd",
+        "map_Kd -s 1 1 1",
+        "map_Kd -clamp on",
+        "map_Kd -bogus x.png",
+    ] {
+        let e =
+            kalos::scene::mtl::parse_mtl(&format!("newmtl a\n{line}\n"), "x.mtl", dir).unwrap_err();
+        assert!(e.starts_with("x.mtl:2: map_Kd"), "{line}: {e}");
+    }
+    // a texture named with spaces loads
+    let dir = temp_dir("spaces");
+    write_png(&dir.join("my tex.png"));
+    write(
+        &dir,
+        "my mats.mtl",
+        "newmtl t\nKd 1 1 1\nmap_Kd -s 1 1 1 -clamp on my tex.png\n",
+    );
+    let obj = write(
+        &dir,
+        "my scene.obj",
+        "mtllib my mats.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl t\nf 1/1 2/2 3/3\n",
+    );
+    let s = scene::load(obj.to_str().unwrap()).unwrap();
+    assert_eq!(s.textures.len(), 1);
+}
+
+/// Warnings of a loaded scene that name material `name`.
+fn warnings_naming<'a>(w: &'a [String], name: &str) -> Vec<&'a String> {
+    w.iter()
+        .filter(|w| w.contains(&format!("'{name}'")))
+        .collect()
+}
+
+#[test]
+fn out_of_range_material_values_warn_once_per_material_with_file_and_line() {
+    let mtl = "newmtl hot\nKd 2 2 2\nKs 1e30 0 0\n\
+               newmtl glass\nNi 0\nillum 7\n\
+               newmtl odd\nKd 0.5 0.5 0.5\nillum 99\n\
+               newmtl fine\nKd 0.5 0.5 0.5\nKs 0.2 0.2 0.2\nillum 2\n\
+               newmtl fine\nKd 0.1 0.1 0.1\n";
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl hot\nf 1 2 3\n";
+    let d = load_with_mtl(obj, mtl).unwrap();
+    let s = scene::Scene::build(d, 0.0).unwrap();
+    let w: Vec<String> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("material '"))
+        .cloned()
+        .collect();
+    let w = &w;
+    let hot = warnings_naming(w, "hot");
+    assert_eq!(hot.len(), 1, "{w:?}");
+    assert!(
+        hot[0].starts_with("m.mtl:1:") && hot[0].contains("Kd") && hot[0].contains("Ks"),
+        "{w:?}"
+    );
+    let glass = warnings_naming(w, "glass");
+    assert_eq!(glass.len(), 1, "{w:?}");
+    assert!(
+        glass[0].starts_with("m.mtl:4:") && glass[0].contains("Ni"),
+        "{w:?}"
+    );
+    let odd = warnings_naming(w, "odd");
+    assert_eq!(odd.len(), 1, "{w:?}");
+    assert!(
+        odd[0].starts_with("m.mtl:7:") && odd[0].contains("illum 99"),
+        "{w:?}"
+    );
+    let fine = warnings_naming(w, "fine");
+    assert_eq!(fine.len(), 1, "{w:?}");
+    assert!(
+        fine[0].starts_with("m.mtl:14:") && fine[0].contains("duplicate"),
+        "{w:?}"
+    );
+    assert_eq!(w.len(), 4, "{w:?}");
+}
+
+#[test]
+fn kd_plus_ks_above_one_is_scaled_to_one_with_one_warning() {
+    use kalos::spectrum::Spectrum;
+    let dir = temp_dir("energy");
+    // mean texel (1, 1, 1)/2 + (1, 0, 0)/4 + (0, 1, 0)/4 + (0, 0, 1)/4: 0.5 per channel
+    write_png(&dir.join("t.png"));
+    write(
+        &dir,
+        "m.mtl",
+        "newmtl bright\nKd 0.8 0.5 0.5\nKs 0.6 0.2 0.2\nNs 20\n\
+         newmtl textured\nKd 1 1 1\nKs 0.75 0.75 0.75\nmap_Kd t.png\n\
+         newmtl mirror\nKs 1.5 1 1\nillum 5\n\
+         newmtl ok\nKd 0.5 0.5 0.5\nKs 0.5 0.5 0.5\n",
+    );
+    let obj = write(
+        &dir,
+        "s.obj",
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+         usemtl bright\nf 1 2 3\nusemtl textured\nf 1/1 2/2 3/3\nusemtl mirror\nf 1 3 2\nusemtl ok\nf 2 1 3\n",
+    );
+    let s = scene::load(obj.to_str().unwrap()).unwrap();
+    for name in ["bright", "textured", "mirror"] {
+        assert_eq!(
+            warnings_naming(&s.warnings, name).len(),
+            1,
+            "{name}: {:?}",
+            s.warnings
+        );
+    }
+    assert!(
+        warnings_naming(&s.warnings, "ok").is_empty(),
+        "{:?}",
+        s.warnings
+    );
+    for m in &s.materials {
+        let b = match m.kd_texture {
+            Some(t) => m.bsdf.with_kd(s.textures[t as usize].mean()),
+            None => m.bsdf,
+        };
+        let a = b
+            .albedo::<16>()
+            .max_value()
+            .max(b.albedo::<3>().max_value());
+        assert!(a <= 1.0 + 1e-5, "{}: albedo {a}", m.name);
+        assert!(
+            a >= 1.0 - 1e-3 || m.name == "ok",
+            "{}: scaled below 1: {a}",
+            m.name
+        );
+        let _ = Spectrum::<8>::ONE;
+    }
+    // the ratio Kd : Ks is kept: bright was (0.8 + 0.6) = 1.4 in red
+    match s.material_of(0).bsdf {
+        Bsdf::DiffuseGlossy(l, p) => {
+            assert!((l.kd[0] / p.ks[0] - 0.8 / 0.6).abs() < 1e-4, "{l:?} {p:?}");
+        }
+        b => panic!("{b:?}"),
+    }
+    // the built-in furnaces are left exactly as they are
+    for name in ["furnace", "furnace-glossy", "cornell", "cornell-glossy"] {
+        let s = scene::load(name).unwrap();
+        assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
+    }
+}
+
+#[test]
+fn toml_material_overrides_warn_like_mtl_values() {
+    let dir = temp_dir("toml-notes");
+    write(&dir, "square.obj", SQUARE);
+    write(&dir, "square.mtl", SQUARE_MTL);
+    let toml = write(
+        &dir,
+        "n.toml",
+        "[[objects]]\nfile = \"square.obj\"\n[materials.white]\nillum = 99\nkd = [0.9, 0.9, 0.9]\nks = [0.3, 0.3, 0.3]\n",
+    );
+    let s = scene::load(toml.to_str().unwrap()).unwrap();
+    let w = warnings_naming(&s.warnings, "white");
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    assert!(
+        w[0].contains("illum 99") && w[0].contains("n.toml"),
+        "{w:?}"
+    );
+    assert!(w[0].contains("scaled"), "{w:?}");
+    let toml = write(
+        &dir,
+        "g.toml",
+        "[[objects]]\nfile = \"square.obj\"\n[materials.white]\nillum = 7\nni = 0\n",
+    );
+    let s = scene::load(toml.to_str().unwrap()).unwrap();
+    let w = warnings_naming(&s.warnings, "white");
+    assert!(w.len() == 1 && w[0].contains("Ni 0"), "{:?}", s.warnings);
+}

@@ -145,23 +145,78 @@ fn safe_name(s: &str) -> String {
         .collect()
 }
 
-pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String> {
-    let fname = file.display().to_string();
-    let text = std::fs::read_to_string(file).map_err(|e| format!("{fname}: {e}"))?;
-    let ex: ExperimentFile = toml::from_str(&text)
-        .map_err(|e| crate::scene::toml_scene::toml_error(&fname, &text, e))?;
-    let dir = file.parent().unwrap_or(Path::new("."));
-    let out = out.unwrap_or_else(|| {
-        dir.join(format!(
-            "{}-results",
-            file.file_stem()
-                .and_then(|s| s.to_str())
-                .unwrap_or("experiment")
-        ))
-    });
-    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+/// Options the experiment sets on every run itself: (option, who sets it). Given again in
+/// `options`, clap would only say "cannot be used multiple times".
+const OWN_OPTIONS: &[(&str, &str)] = &[
+    ("--spp", "[budgets] (samples per pixel of every run)"),
+    ("--time", "[budgets] (seconds of every run)"),
+    (
+        "--seed",
+        "the experiment (seeds 0 .. repeats - 1, one per repeat)",
+    ),
+    ("--quiet", "the experiment"),
+    ("-q", "the experiment"),
+];
+
+/// Refuse an option of `OWN_OPTIONS` in `options` (`what` names where they come from);
+/// `allowed` are exceptions (the reference may choose its seed).
+fn refuse_own_options(options: &str, what: &str, allowed: &[&str]) -> Result<(), String> {
+    for w in words(options) {
+        for &(opt, owner) in OWN_OPTIONS {
+            let given = w == opt || (opt.starts_with("--") && w.starts_with(&format!("{opt}=")));
+            if given && !allowed.contains(&opt) {
+                return Err(format!(
+                    "{what}: options: {opt} is set by {owner}: remove it from the options"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// What the validation of an experiment file settles before any work starts.
+struct Plan {
+    budgets: Vec<f64>,
+    kind: &'static str,
+    repeats: u32,
+    /// (width, height) of every run and of the reference.
+    res: (u32, u32),
+    crop: [u32; 4],
+    zoom: u32,
+}
+
+/// Check an experiment file for contradictions before anything is rendered or written:
+/// every error names the file and the key. `scene_res` is the scene's default resolution.
+fn validate(
+    ex: &ExperimentFile,
+    fname: &str,
+    scene_spec: &str,
+    scene_res: Option<(u32, u32)>,
+) -> Result<Plan, String> {
     if ex.configs.is_empty() {
         return Err(format!("{fname}: no [[config]]"));
+    }
+    // names: each config's images are written under its name
+    for (i, c) in ex.configs.iter().enumerate() {
+        if c.name.trim().is_empty() {
+            return Err(format!("{fname}: [[config]] {}: name is empty", i + 1));
+        }
+        for d in &ex.configs[..i] {
+            if d.name == c.name {
+                return Err(format!(
+                    "{fname}: [[config]] name {:?} is used twice: each configuration needs its own name (its images are written under it)",
+                    c.name
+                ));
+            }
+            if safe_name(&d.name) == safe_name(&c.name) {
+                return Err(format!(
+                    "{fname}: [[config]] names {:?} and {:?} both give the file name {:?}: their images would overwrite each other",
+                    d.name,
+                    c.name,
+                    safe_name(&c.name)
+                ));
+            }
+        }
     }
     let (budgets, kind): (Vec<f64>, &'static str) = match (&ex.budgets.seconds, &ex.budgets.spp) {
         (Some(s), None) if !s.is_empty() => (s.clone(), "seconds"),
@@ -175,34 +230,218 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
     if budgets.iter().any(|b| !(b.is_finite() && *b > 0.0)) {
         return Err(format!("{fname}: [budgets]: every budget must be positive"));
     }
+    let repeats = match ex.repeats {
+        Some(0) => {
+            return Err(format!(
+                "{fname}: repeats = 0: must be at least 1 (the number of seeds per configuration and budget)"
+            ))
+        }
+        r => r.unwrap_or(1),
+    };
+    // the reference: exactly one source
+    let r = &ex.reference;
+    let given: Vec<&str> = [
+        ("image", r.image.is_some()),
+        ("spp", r.spp.is_some()),
+        ("constant", r.constant.is_some()),
+    ]
+    .iter()
+    .filter(|k| k.1)
+    .map(|k| k.0)
+    .collect();
+    if given.len() != 1 {
+        return Err(format!(
+            "{fname}: [reference] needs exactly one of image, spp or constant; it has {}",
+            if given.is_empty() {
+                "none".to_string()
+            } else {
+                given.join(" and ")
+            }
+        ));
+    }
+    if let Some(v) = r.constant {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!(
+                "{fname}: [reference] constant = {v}: must be a finite non-negative radiance"
+            ));
+        }
+    }
+    if r.spp == Some(0) {
+        return Err(format!("{fname}: [reference] spp = 0: must be at least 1"));
+    }
+    if !r.options.trim().is_empty() && r.spp.is_none() {
+        return Err(format!(
+            "{fname}: [reference] options apply only to a rendered reference (spp), not to {}",
+            given[0]
+        ));
+    }
+    // options: those the experiment sets itself are refused with the reason; then each
+    // run's full command line is parsed now, not after hours of rendering
+    refuse_own_options(&ex.options, fname, &[])?;
+    refuse_own_options(&r.options, &format!("{fname}: [reference]"), &["--seed"])?;
+    let common = words(&ex.options);
+    let base = parse_render(scene_spec, &common, &format!("{fname}: options"))?;
+    let res = base
+        .job
+        .res
+        .or(scene_res)
+        .unwrap_or(crate::render::DEFAULT_RES);
+    let budget_opt = if kind == "seconds" { "--time" } else { "--spp" };
+    for c in &ex.configs {
+        let what = format!("{fname}: config {}", c.name);
+        refuse_own_options(&c.options, &what, &[])?;
+        for b in &budgets {
+            let bs = if kind == "seconds" {
+                b.to_string()
+            } else {
+                (*b as u32).to_string()
+            };
+            let mut o = common.clone();
+            o.extend(words(&c.options));
+            o.extend([budget_opt, bs.as_str(), "--seed", "0", "-q"]);
+            let a = parse_render(scene_spec, &o, &what)?;
+            let run_res = a
+                .job
+                .res
+                .or(scene_res)
+                .unwrap_or(crate::render::DEFAULT_RES);
+            if run_res != res {
+                return Err(format!(
+                    "{what}: renders {}x{}, but the reference is {}x{}: give --res in the common options only",
+                    run_res.0, run_res.1, res.0, res.1
+                ));
+            }
+        }
+    }
+    if let Some(spp) = r.spp {
+        let mut o = common.clone();
+        o.extend(words(&r.options));
+        let spp_s = spp.to_string();
+        o.extend(["--spp", spp_s.as_str(), "-q"]);
+        let a = parse_render(scene_spec, &o, &format!("{fname}: [reference]"))?;
+        if a.job
+            .res
+            .or(scene_res)
+            .unwrap_or(crate::render::DEFAULT_RES)
+            != res
+        {
+            return Err(format!(
+                "{fname}: [reference] options: the reference must be rendered at the runs' {}x{}",
+                res.0, res.1
+            ));
+        }
+    }
+    // the side-by-side crop: inside the image, not empty, and a bounded picture
+    let (w, h) = res;
+    let crop = match ex.crop {
+        Some(c) => {
+            if c[2] == 0 || c[3] == 0 {
+                return Err(format!(
+                    "{fname}: crop = {c:?}: width and height must be at least 1"
+                ));
+            }
+            if c[0] as u64 + c[2] as u64 > w as u64 || c[1] as u64 + c[3] as u64 > h as u64 {
+                return Err(format!(
+                    "{fname}: crop = {c:?} (x, y, w, h) reaches outside the {w}x{h} image"
+                ));
+            }
+            c
+        }
+        None => {
+            let s = w.min(h).min(96);
+            [(w - s) / 2, (h - s) / 2, s, s]
+        }
+    };
+    let tiles = ex.configs.len() + 1;
+    let fits = |z: u32| {
+        let (a, b) = crate::report::side_by_side_size(tiles, crop[2], crop[3], z);
+        a.max(b) <= crate::report::MAX_SIDE_BY_SIDE
+    };
+    let zoom = match ex.zoom {
+        Some(0) => return Err(format!("{fname}: zoom = 0: must be at least 1")),
+        Some(z) if !fits(z) => {
+            let (a, b) = crate::report::side_by_side_size(tiles, crop[2], crop[3], z);
+            return Err(format!(
+                "{fname}: zoom = {z}: the side-by-side image of {tiles} crops of {}x{} would be {a}x{b} pixels, more than {} on a side: lower zoom or the crop",
+                crop[2],
+                crop[3],
+                crate::report::MAX_SIDE_BY_SIDE
+            ));
+        }
+        Some(z) => z,
+        // the default zoom shrinks to fit many configurations
+        None => match (1..=3).rev().find(|&z| fits(z)) {
+            Some(z) => z,
+            None => {
+                return Err(format!(
+                    "{fname}: the side-by-side image of {tiles} crops of {}x{} would be more than {} pixels wide: give a smaller crop",
+                    crop[2],
+                    crop[3],
+                    crate::report::MAX_SIDE_BY_SIDE
+                ))
+            }
+        },
+    };
+    Ok(Plan {
+        budgets,
+        kind,
+        repeats,
+        res,
+        crop,
+        zoom,
+    })
+}
+
+pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String> {
+    let fname = file.display().to_string();
+    let text = crate::input::read_text(file)?;
+    let ex: ExperimentFile = toml::from_str(&text)
+        .map_err(|e| crate::scene::toml_scene::toml_error(&fname, &text, e))?;
+    let dir = file.parent().unwrap_or(Path::new("."));
     let scene_spec = if crate::scene::builtin::NAMES.contains(&ex.scene.as_str()) {
         ex.scene.clone()
     } else {
         dir.join(&ex.scene).display().to_string()
     };
     let scene = crate::scene::load(&scene_spec)?;
+    // Validate everything before spending time on any run or creating the output folder.
+    let plan = validate(&ex, &fname, &scene_spec, scene.defaults.res)?;
+    let (budgets, kind) = (plan.budgets.clone(), plan.kind);
     let common = words(&ex.options);
-
-    // Validate every configuration before spending time on any.
-    for c in &ex.configs {
-        let mut o = common.clone();
-        o.extend(words(&c.options));
-        parse_render(&scene_spec, &o, &format!("{fname}: config {}", c.name))?;
-    }
-
-    // The reference: an image, or a cached render.
-    let reference = match (&ex.reference.image, ex.reference.spp) {
-        (None, None) if ex.reference.constant.is_some() => {
-            let v = ex.reference.constant.unwrap_or(1.0);
-            let a = parse_render(&scene_spec, &common, &format!("{fname}: options"))?;
-            let (w, h) = a
-                .job
-                .res
-                .or(scene.defaults.res)
-                .unwrap_or(crate::render::DEFAULT_RES);
-            RgbImage::new(w, h, vec![[v; 3]; (w * h) as usize])
+    let given_reference = match (&ex.reference.image, ex.reference.constant) {
+        (Some(p), _) => {
+            let path = dir.join(p);
+            let img = read_image(&path)?;
+            let name = path.display().to_string();
+            crate::metrics::check_comparable(&img, &name)
+                .map_err(|e| format!("{fname}: [reference] image {e}"))?;
+            if (img.width, img.height) != plan.res {
+                return Err(format!(
+                    "{fname}: [reference] image {name} is {}x{}, but the runs render {}x{}",
+                    img.width, img.height, plan.res.0, plan.res.1
+                ));
+            }
+            Some(img)
         }
-        (Some(p), None) => read_image(&dir.join(p))?,
+        (None, Some(v)) => {
+            let (w, h) = plan.res;
+            Some(RgbImage::new(w, h, vec![[v; 3]; (w * h) as usize]))
+        }
+        (None, None) => None,
+    };
+    let out = out.unwrap_or_else(|| {
+        dir.join(format!(
+            "{}-results",
+            file.file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("experiment")
+        ))
+    });
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+
+    // The reference: an image or a constant (read above), or a cached render.
+    let reference = match (given_reference, ex.reference.spp) {
+        (Some(img), _) => img,
         (None, Some(spp)) => {
             let mut o = common.clone();
             o.extend(words(&ex.reference.options));
@@ -217,8 +456,8 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
             let key = format!("{scene_spec} {}", o.join(" "));
             let cached = out.join("reference.exr");
             let key_file = out.join("reference.key");
-            if cached.exists()
-                && std::fs::read_to_string(&key_file).ok().as_deref() == Some(key.as_str())
+            let img = if cached.exists()
+                && crate::input::read_text(&key_file).ok().as_deref() == Some(key.as_str())
             {
                 read_image(&cached)?
             } else {
@@ -231,16 +470,19 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
                 std::fs::write(&key_file, &key)
                     .map_err(|e| format!("{}: {e}", key_file.display()))?;
                 r.image
-            }
+            };
+            crate::metrics::check_comparable(&img, &cached.display().to_string())
+                .map_err(|e| format!("{fname}: [reference]: {e}"))?;
+            img
         }
-        _ => {
+        (None, None) => {
             return Err(format!(
-                "{fname}: [reference] needs exactly one of image or spp"
+                "{fname}: [reference] needs exactly one of image, spp or constant"
             ))
         }
     };
 
-    let repeats = ex.repeats.unwrap_or(1).max(1);
+    let repeats = plan.repeats;
     let mut rows: Vec<ResultRow> = Vec::new();
     // Budgets outer, configurations inner: runs of one budget see the same machine load.
     let mut last: Vec<Option<RgbImage>> = vec![None; ex.configs.len()];
@@ -389,10 +631,7 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
     }
 
     // Side by side: the same crop of every configuration (largest budget) and the reference.
-    let c = ex.crop.unwrap_or_else(|| {
-        let s = reference.width.min(reference.height).min(96);
-        [(reference.width - s) / 2, (reference.height - s) / 2, s, s]
-    });
+    let c = plan.crop;
     let mut tiles: Vec<(String, RgbImage)> = last_images
         .iter()
         .map(|(n, i)| (n.clone(), crop(i, c)))
@@ -401,7 +640,7 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
     side_by_side(
         &out.join("side-by-side.png"),
         &tiles,
-        ex.zoom.unwrap_or(3),
+        plan.zoom,
         ex.exposure.unwrap_or(0.0),
     )?;
     if !quiet {
@@ -411,4 +650,45 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stricter validation must still accept every experiment the project ships.
+    #[test]
+    fn the_projects_experiment_files_pass_validation() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/results");
+        let mut n = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let p = entry.unwrap().path();
+            if p.extension().and_then(|e| e.to_str()) != Some("toml") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&p).unwrap();
+            let ex: ExperimentFile = toml::from_str(&text).unwrap();
+            let spec = if crate::scene::builtin::NAMES.contains(&ex.scene.as_str()) {
+                ex.scene.clone()
+            } else {
+                dir.join(&ex.scene).display().to_string()
+            };
+            let res = crate::scene::load_desc(&spec).unwrap().defaults.res;
+            let name = p.display().to_string();
+            let plan = validate(&ex, &name, &spec, res).unwrap_or_else(|e| panic!("{e}"));
+            assert!(plan.zoom >= 1 && plan.repeats >= 1, "{name}");
+            n += 1;
+        }
+        assert!(n >= 5, "{n} experiment files");
+    }
+
+    #[test]
+    fn own_options_are_refused_with_who_sets_them() {
+        let e = refuse_own_options("--rr off --spp=4", "x.toml: config a", &[]).unwrap_err();
+        assert!(e.contains("--spp is set by [budgets]"), "{e}");
+        let e = refuse_own_options("-q", "x.toml", &[]).unwrap_err();
+        assert!(e.contains("-q is set by the experiment"), "{e}");
+        assert!(refuse_own_options("--seed 7", "x.toml: [reference]", &["--seed"]).is_ok());
+        assert!(refuse_own_options("--sppx 3 --rr classic", "x.toml", &[]).is_ok());
+    }
 }

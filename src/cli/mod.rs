@@ -104,6 +104,9 @@ pub fn run(cli: Cli) -> Result<(), String> {
         } => {
             let x = crate::image_io::read_image(&image)?;
             let y = crate::image_io::read_image(&reference)?;
+            // NaN metrics, or a 0x0 "perfect match", would tell the user nothing
+            crate::metrics::check_comparable(&x, &image.display().to_string())?;
+            crate::metrics::check_comparable(&y, &reference.display().to_string())?;
             let m = crate::metrics::Metrics::compute(&x, &y)
                 .map_err(|e| format!("{} vs {}: {e}", image.display(), reference.display()))?;
             if json {

@@ -1,6 +1,10 @@
 //! Image files by extension: `.exr` (linear float, optional extra layers), `.pfm`
 //! (linear float), `.png` (exposure + sRGB transfer, 8 bit). Reading supports the same
-//! three, so `compare` and references work with any of them.
+//! three, so `compare` and references work with any of them. Every writer encodes into
+//! memory and writes the file in one call, so a full disk or a failed write is an error
+//! (a buffered writer flushed on drop loses it); every reader reads through
+//! `crate::input` (regular files within the input limit) and refuses images without
+//! pixels or whose decoded size exceeds that limit.
 
 use std::path::Path;
 
@@ -86,7 +90,7 @@ pub fn write_image(
     }
 }
 
-fn write_exr(path: &Path, img: &RgbImage, extra: &[ExtraLayer]) -> Result<(), exr::error::Error> {
+fn write_exr(path: &Path, img: &RgbImage, extra: &[ExtraLayer]) -> Result<(), String> {
     use exr::prelude::*;
     let size = (img.width as usize, img.height as usize);
     let plane = |c: usize| -> Vec<f32> { img.data.iter().map(|p| p[c]).collect() };
@@ -121,7 +125,12 @@ fn write_exr(path: &Path, img: &RgbImage, extra: &[ExtraLayer]) -> Result<(), ex
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(channels.into()),
     );
-    Image::from_layer(layer).write().to_file(path)
+    let mut out = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(&mut out)
+        .map_err(|e| e.to_string())?;
+    std::fs::write(path, out.into_inner()).map_err(|e| e.to_string())
 }
 
 fn write_pfm(path: &Path, img: &RgbImage) -> std::io::Result<()> {
@@ -156,7 +165,7 @@ pub fn srgb_decode(v: f32) -> f32 {
     }
 }
 
-fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> image::ImageResult<()> {
+fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), String> {
     let k = 2f32.powf(exposure);
     let mut buf = Vec::with_capacity(img.data.len() * 3);
     for p in &img.data {
@@ -164,46 +173,110 @@ fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> image::ImageResult<(
             buf.push((srgb_encode(v * k).clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
         }
     }
-    image::save_buffer(
-        path,
-        &buf,
-        img.width,
-        img.height,
-        image::ExtendedColorType::Rgb8,
-    )
+    encode_png(path, img.width, img.height, &buf)
 }
 
-/// Read an EXR (first RGB(A) layer), PFM or PNG (sRGB-decoded) as linear RGB.
+/// Encode 8-bit RGB in memory, then one write whose error is seen (image::save_buffer's
+/// BufWriter is flushed on drop, where a full disk goes unnoticed).
+fn encode_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), String> {
+    use image::ImageEncoder;
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
+        .map_err(|e| e.to_string())?;
+    std::fs::write(path, png).map_err(|e| e.to_string())
+}
+
+/// Write 8-bit sRGB pixels (row-major RGB) as a PNG, reporting any write error (plots
+/// and side-by-side images drawn into memory).
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), String> {
+    encode_png(path, width, height, rgb)
+        .map_err(|e| format!("{}: cannot write image: {e}", path.display()))
+}
+
+/// Largest number of pixels an image read may have: the input limit over 12 bytes (one
+/// f32 RGB pixel), so no header can make kalos allocate more than that limit.
+fn max_pixels() -> Result<u64, String> {
+    Ok(crate::input::max_input_bytes()? / 12)
+}
+
+/// Decode a PNG or JPEG (format from the content) held in memory, within the image
+/// crate's default allocation limit (512 MiB).
+pub fn decode_8bit(bytes: &[u8]) -> Result<image::DynamicImage, String> {
+    image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?
+        .decode()
+        .map_err(|e| e.to_string())
+}
+
+/// Read an EXR (first RGB(A) layer), PFM or PNG (sRGB-decoded) as linear RGB. Images
+/// without pixels (0 x h, w x 0) are refused.
 pub fn read_image(path: &Path) -> Result<RgbImage, String> {
     let fail = |e: &dyn std::fmt::Display| format!("{}: cannot read image: {e}", path.display());
-    if !path.exists() {
-        return Err(format!("{}: no such file", path.display()));
-    }
-    match format_of(path)? {
-        Format::Exr => read_exr(path).map_err(|e| fail(&e)),
-        Format::Pfm => read_pfm(path).map_err(|e| fail(&e)),
+    let format = format_of(path)?;
+    let bytes = crate::input::read_bytes(path)?;
+    let img = match format {
+        Format::Exr => read_exr(&bytes).map_err(|e| fail(&e))?,
+        Format::Pfm => read_pfm(&bytes).map_err(|e| fail(&e))?,
         Format::Png => {
-            let im = image::open(path).map_err(|e| fail(&e))?.to_rgb32f();
+            let im = decode_8bit(&bytes).map_err(|e| fail(&e))?.to_rgb32f();
             let (w, h) = im.dimensions();
             let data = im
                 .pixels()
                 .map(|p| [srgb_decode(p[0]), srgb_decode(p[1]), srgb_decode(p[2])])
                 .collect();
-            Ok(RgbImage::new(w, h, data))
+            RgbImage::new(w, h, data)
         }
+    };
+    if img.width == 0 || img.height == 0 {
+        return Err(format!(
+            "{}: the image is {}x{}: it has no pixels",
+            path.display(),
+            img.width,
+            img.height
+        ));
     }
+    Ok(img)
 }
 
-fn read_exr(path: &Path) -> Result<RgbImage, exr::error::Error> {
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![[0.0f32; 3]; res.width() * res.height()]),
-        |(w, data), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            data[pos.y() * *w + pos.x()] = [r, g, b];
-        },
-    )?;
+fn read_exr(bytes: &[u8]) -> Result<RgbImage, String> {
+    use exr::prelude::traits::*;
+    let limit = max_pixels()?;
+    // the header's size is checked before the pixels are allocated
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            move |res, _| {
+                let n = res.width() as u64 * res.height() as u64;
+                let data = if n <= limit {
+                    vec![[0.0f32; 3]; n as usize]
+                } else {
+                    Vec::new()
+                };
+                (res.width(), data)
+            },
+            |(w, data), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                if let Some(p) = data.get_mut(pos.y() * *w + pos.x()) {
+                    *p = [r, g, b];
+                }
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| e.to_string())?;
     let size = image.layer_data.size;
     let (_, data) = image.layer_data.channel_data.pixels;
+    let n = size.width() as u64 * size.height() as u64;
+    if data.len() as u64 != n {
+        return Err(format!(
+            "the image is {}x{}: more pixels than the input limit allows ({limit})",
+            size.width(),
+            size.height()
+        ));
+    }
     Ok(RgbImage::new(
         size.width() as u32,
         size.height() as u32,
@@ -211,8 +284,7 @@ fn read_exr(path: &Path) -> Result<RgbImage, exr::error::Error> {
     ))
 }
 
-fn read_pfm(path: &Path) -> Result<RgbImage, String> {
-    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+fn read_pfm(bytes: &[u8]) -> Result<RgbImage, String> {
     // header: 3 whitespace-separated tokens after the magic, then one whitespace byte
     let mut pos = 0;
     let mut tokens = Vec::new();
@@ -238,9 +310,23 @@ fn read_pfm(path: &Path) -> Result<RgbImage, String> {
     let w: u32 = tokens[1].parse().map_err(|_| "bad PFM width")?;
     let h: u32 = tokens[2].parse().map_err(|_| "bad PFM height")?;
     let scale: f32 = tokens[3].parse().map_err(|_| "bad PFM scale")?;
-    let n = w as usize * h as usize * channels;
-    if bytes.len() < pos + n * 4 {
-        return Err("PFM file is shorter than its header says".into());
+    // the sign of the scale gives the byte order: 0 or NaN gives none
+    if !(scale.is_finite() && scale != 0.0) {
+        return Err(format!(
+            "PFM scale {:?} must be a finite non-zero number (negative: little endian, positive: big endian)",
+            tokens[3]
+        ));
+    }
+    if w == 0 || h == 0 {
+        return Err(format!("the image is {w}x{h}: it has no pixels"));
+    }
+    // in u128: 4 x w x h x 3 overflows 64 bits for the largest headers
+    let need = 4 * w as u128 * h as u128 * channels as u128;
+    if (bytes.len().saturating_sub(pos) as u128) < need {
+        return Err(format!(
+            "PFM file is shorter than its header says ({w}x{h}, {channels} channel{})",
+            if channels > 1 { "s" } else { "" }
+        ));
     }
     let rd = |i: usize| {
         let b = [
@@ -309,6 +395,61 @@ mod tests {
         assert!((back.get(1, 0)[0] - 0.25).abs() < 0.01);
         assert!(read_image(&dir.join("missing.exr")).is_err());
         assert!(format_of(Path::new("x.tga")).is_err());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("kalos-io-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// /dev/full fails every write with ENOSPC, as a full disk does: every writer must
+    /// say so (PNG's buffered writer used to drop the error).
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn every_writer_reports_a_full_disk() {
+        let dir = temp("full");
+        let img = sample_image();
+        for name in ["full.png", "full.pfm", "full.exr"] {
+            let p = dir.join(name);
+            std::os::unix::fs::symlink("/dev/full", &p).unwrap();
+            let e = write_image(&p, &img, 0.0, &[]).unwrap_err();
+            assert!(e.contains(name) && e.contains("cannot write"), "{e}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn pfm_with_a_zero_nan_or_infinite_scale_is_refused() {
+        let dir = temp("scale");
+        for scale in ["0", "-0.0", "nan", "inf", "-inf", "NaN"] {
+            let p = dir.join("s.pfm");
+            let mut b = format!("PF\n1 1\n{scale}\n").into_bytes();
+            b.extend_from_slice(&[0x3f, 0x80, 0, 0, 0x3f, 0x80, 0, 0, 0x3f, 0x80, 0, 0]);
+            std::fs::write(&p, b).unwrap();
+            let e = read_image(&p).unwrap_err();
+            assert!(e.contains("s.pfm") && e.contains("scale"), "{scale}: {e}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn empty_and_oversized_pfm_are_refused() {
+        let dir = temp("empty");
+        let cases = [
+            ("PF\n0 0\n-1.0\n".to_string(), "0x0"),
+            ("PF\n0 5\n-1.0\n".to_string(), "0x5"),
+            ("PF\n4294967295 4294967295\n-1.0\n".to_string(), "shorter"),
+            ("Pf\n4294967295 4294967295\n-1.0\n".to_string(), "shorter"),
+        ];
+        for (head, want) in cases {
+            let p = dir.join("e.pfm");
+            std::fs::write(&p, head.as_bytes()).unwrap();
+            let e = read_image(&p).unwrap_err();
+            assert!(e.contains("e.pfm") && e.contains(want), "{head:?}: {e}");
+        }
         std::fs::remove_dir_all(&dir).ok();
     }
 }

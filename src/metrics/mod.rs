@@ -8,7 +8,8 @@
 //! - [`efficiency`]: 1 / (error * seconds).
 //!
 //! All accumulate in f64. Non-finite pixels propagate into the results (NaN), on purpose:
-//! a broken image should not get a good score.
+//! a broken image should not get a good score; [`check_comparable`] refuses such images
+//! (and images without pixels) up front, naming the file, where a user gives them.
 
 use crate::image_io::RgbImage;
 use serde::Serialize;
@@ -29,6 +30,41 @@ pub const PERCEPTUAL_FLOOR: f64 = 1e-2;
 /// Rec.709 / sRGB luminance weights.
 pub const REC709: [f64; 3] = [0.2126, 0.7152, 0.0722];
 
+/// Refuse an image that cannot be judged or judged against: no pixels, or NaN or
+/// infinite values (the metrics would be NaN, or an empty image would "match"). `name`
+/// (the file) starts the message.
+pub fn check_comparable(img: &RgbImage, name: &str) -> Result<(), String> {
+    if img.data.is_empty() {
+        return Err(format!(
+            "{name}: the image is {}x{}: it has no pixels to compare",
+            img.width, img.height
+        ));
+    }
+    let (mut nan, mut inf, mut first) = (0u64, 0u64, None);
+    for (i, p) in img.data.iter().enumerate() {
+        let (n, f) = (
+            p.iter().filter(|v| v.is_nan()).count(),
+            p.iter().filter(|v| v.is_infinite()).count(),
+        );
+        if n + f > 0 {
+            first.get_or_insert(i);
+            nan += n as u64;
+            inf += f as u64;
+        }
+    }
+    match first {
+        None => Ok(()),
+        Some(i) => {
+            let w = img.width.max(1) as usize;
+            Err(format!(
+                "{name}: {nan} NaN and {inf} infinite values (first at pixel x {}, y {}): an image with them cannot be compared",
+                i % w,
+                i / w
+            ))
+        }
+    }
+}
+
 fn check(x: &RgbImage, y: &RgbImage) -> Result<(), String> {
     if (x.width, x.height) != (y.width, y.height) {
         return Err(format!(
@@ -41,6 +77,12 @@ fn check(x: &RgbImage, y: &RgbImage) -> Result<(), String> {
             "image data sizes differ: {} and {} pixels",
             x.data.len(),
             y.data.len()
+        ));
+    }
+    if x.data.is_empty() {
+        return Err(format!(
+            "the images are {}x{}: no pixels to compare",
+            x.width, x.height
         ));
     }
     Ok(())
@@ -257,5 +299,25 @@ mod tests {
         let e = rmse(&a, &b).unwrap_err();
         assert!(e.contains("2x1") && e.contains("1x2"), "{e}");
         assert!(Metrics::compute(&a, &b).is_err());
+    }
+
+    #[test]
+    fn nan_infinite_and_empty_images_are_not_comparable() {
+        let good = img(2, 1, &[[0.5; 3], [1.0; 3]]);
+        assert!(check_comparable(&good, "g.pfm").is_ok());
+        let nan = img(2, 1, &[[0.5; 3], [0.0, f32::NAN, 0.0]]);
+        let e = check_comparable(&nan, "n.pfm").unwrap_err();
+        assert!(
+            e.starts_with("n.pfm: 1 NaN and 0 infinite") && e.contains("x 1, y 0"),
+            "{e}"
+        );
+        let inf = img(1, 1, &[[f32::INFINITY, f32::NEG_INFINITY, 1.0]]);
+        let e = check_comparable(&inf, "i.pfm").unwrap_err();
+        assert!(e.contains("0 NaN and 2 infinite"), "{e}");
+        let empty = img(0, 0, &[]);
+        let e = check_comparable(&empty, "e.pfm").unwrap_err();
+        assert!(e.contains("0x0"), "{e}");
+        // an empty pair no longer "matches perfectly"
+        assert!(Metrics::compute(&empty, &empty).is_err());
     }
 }

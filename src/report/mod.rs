@@ -124,11 +124,22 @@ pub fn plot_panels(stem: &Path, panels: &[Panel]) -> Result<(), String> {
     let size = (620 * panels.len().max(1) as u32, 480);
     let png = stem.with_extension("png");
     let svg = stem.with_extension("svg");
-    draw_figure(BitMapBackend::new(&png, size).into_drawing_area(), panels)
-        .map_err(|e| format!("{}: {e}", png.display()))?;
-    draw_figure(SVGBackend::new(&svg, size).into_drawing_area(), panels)
-        .map_err(|e| format!("{}: {e}", svg.display()))?;
-    Ok(())
+    // drawn in memory, written in one call whose error is seen (plotters' file
+    // backends write on drop, where a full disk goes unnoticed)
+    let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
+    draw_figure(
+        BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area(),
+        panels,
+    )
+    .map_err(|e| format!("{}: {e}", png.display()))?;
+    crate::image_io::write_png_rgb8(&png, size.0, size.1, &rgb)?;
+    let mut text = String::new();
+    draw_figure(
+        SVGBackend::with_string(&mut text, size).into_drawing_area(),
+        panels,
+    )
+    .map_err(|e| format!("{}: {e}", svg.display()))?;
+    std::fs::write(&svg, text).map_err(|e| format!("{}: {e}", svg.display()))
 }
 
 /// Crop (x, y, w, h) of an image, clipped to it.
@@ -155,14 +166,40 @@ pub fn side_by_side(
 ) -> Result<(), String> {
     register_font();
     let zoom = zoom.max(1);
-    let tw = tiles.iter().map(|t| t.1.width).max().unwrap_or(1) * zoom;
-    let th = tiles.iter().map(|t| t.1.height).max().unwrap_or(1) * zoom;
-    let label_h = 28;
-    let gap = 6;
-    let n = tiles.len().max(1) as u32;
-    let size = (n * tw + (n + 1) * gap, th + label_h + 2 * gap);
-    let root = BitMapBackend::new(path, size).into_drawing_area();
-    let e = |e: DrawingAreaErrorKind<_>| format!("{}: {e}", path.display());
+    let (w, h) = (
+        tiles.iter().map(|t| t.1.width).max().unwrap_or(1),
+        tiles.iter().map(|t| t.1.height).max().unwrap_or(1),
+    );
+    let full = side_by_side_size(tiles.len(), w, h, zoom);
+    if full.0.max(full.1) > MAX_SIDE_BY_SIDE {
+        return Err(format!(
+            "{}: the side-by-side image would be {}x{} pixels, more than {MAX_SIDE_BY_SIDE} on a side: use a smaller crop or zoom",
+            path.display(),
+            full.0,
+            full.1
+        ));
+    }
+    let (tw, th) = (w * zoom, h * zoom);
+    let size = (full.0 as u32, full.1 as u32);
+    // drawn in memory and written by image_io, which reports write errors
+    let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
+    draw_tiles(&mut rgb, size, tiles, zoom, exposure, (tw, th))
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    crate::image_io::write_png_rgb8(path, size.0, size.1, &rgb)
+}
+
+/// The tiles and their labels of [`side_by_side`], drawn into an RGB buffer.
+fn draw_tiles(
+    rgb: &mut [u8],
+    size: (u32, u32),
+    tiles: &[(String, RgbImage)],
+    zoom: u32,
+    exposure: f32,
+    (tw, th): (u32, u32),
+) -> Result<(), String> {
+    let gap = SIDE_BY_SIDE_GAP;
+    let root = BitMapBackend::with_buffer(rgb, size).into_drawing_area();
+    let e = |e: DrawingAreaErrorKind<_>| e.to_string();
     root.fill(&WHITE).map_err(e)?;
     let k = 2f32.powf(exposure);
     for (i, (name, img)) in tiles.iter().enumerate() {
@@ -186,6 +223,22 @@ pub fn side_by_side(
         .map_err(e)?;
     }
     root.present().map_err(e)
+}
+
+/// The largest side, in pixels, of a [`side_by_side`] image (16384: 768 MiB of RGB at
+/// most): a crop zoomed without bound would take the machine's memory.
+pub const MAX_SIDE_BY_SIDE: u64 = 16384;
+const SIDE_BY_SIDE_LABEL: u32 = 28;
+const SIDE_BY_SIDE_GAP: u32 = 6;
+
+/// (width, height) in pixels of the [`side_by_side`] image of `n` tiles of at most
+/// `w` x `h` pixels each, scaled by `zoom` (in u64: no overflow for any input).
+pub fn side_by_side_size(n: usize, w: u32, h: u32, zoom: u32) -> (u64, u64) {
+    let (n, zoom, gap) = (n.max(1) as u64, zoom.max(1) as u64, SIDE_BY_SIDE_GAP as u64);
+    (
+        n * w as u64 * zoom + (n + 1) * gap,
+        h as u64 * zoom + SIDE_BY_SIDE_LABEL as u64 + 2 * gap,
+    )
 }
 
 #[cfg(test)]
@@ -227,6 +280,49 @@ mod tests {
         .unwrap();
         let back = crate::image_io::read_image(&dir.join("tiles.png")).unwrap();
         assert!(back.width > 24);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// /dev/full fails every write, as a full disk does: plots and tiles say so.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn write_errors_are_reported() {
+        let dir = std::env::temp_dir().join(format!("kalos-report-full-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        for name in ["p.png", "p.svg", "t.png"] {
+            std::os::unix::fs::symlink("/dev/full", dir.join(name)).unwrap();
+        }
+        let panel = Panel {
+            title: "RMSE".into(),
+            x_label: "s".into(),
+            y_label: "rmse".into(),
+            series: vec![Series {
+                name: "a".into(),
+                points: vec![(1.0, 1.0), (2.0, 0.5)],
+            }],
+        };
+        let e = plot_panels(&dir.join("p"), &[panel]).unwrap_err();
+        assert!(e.contains("p.png"), "{e}");
+        std::fs::remove_file(dir.join("p.png")).unwrap();
+        let panel = Panel {
+            title: "RMSE".into(),
+            x_label: "s".into(),
+            y_label: "rmse".into(),
+            series: vec![Series {
+                name: "a".into(),
+                points: vec![(1.0, 1.0), (2.0, 0.5)],
+            }],
+        };
+        let e = plot_panels(&dir.join("p"), &[panel]).unwrap_err();
+        assert!(e.contains("p.svg"), "{e}");
+        let tile = RgbImage::new(2, 2, vec![[0.5; 3]; 4]);
+        let e = side_by_side(&dir.join("t.png"), &[("a".into(), tile)], 2, 0.0).unwrap_err();
+        assert!(e.contains("t.png"), "{e}");
+        // and a zoom without bound is refused before anything is allocated
+        let tile = RgbImage::new(8, 8, vec![[0.5; 3]; 64]);
+        let e = side_by_side(&dir.join("u.png"), &[("a".into(), tile)], 100_000, 0.0).unwrap_err();
+        assert!(e.contains("side-by-side"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -37,6 +37,11 @@ pub struct MaterialDesc {
     /// BSDF (tabulated when the scene is built): the radiance of a closed room of such
     /// surfaces is exactly 1 (`furnace-glossy`). No file format sets it.
     pub emit_one_minus_albedo: bool,
+    /// Where the material was defined (`file:line` of its `newmtl`), for warnings.
+    pub source: Option<String>,
+    /// What kalos renders differently from what the file asks (one warning per material
+    /// when the scene is built).
+    pub notes: Vec<String>,
 }
 
 impl MaterialDesc {
@@ -52,6 +57,8 @@ impl MaterialDesc {
             illum: 2,
             map_kd: None,
             emit_one_minus_albedo: false,
+            source: None,
+            notes: Vec::new(),
         }
     }
 }
@@ -151,6 +158,7 @@ impl Scene {
         let mut textures: Vec<Texture> = Vec::new();
         let mut tex_paths: Vec<PathBuf> = Vec::new();
         let mut materials = Vec::with_capacity(desc.materials.len());
+        let mut material_warnings: Vec<String> = Vec::new();
         for m in &desc.materials {
             let kd_texture = match &m.map_kd {
                 Some(p) => Some(match tex_paths.iter().position(|q| q == p) {
@@ -163,7 +171,12 @@ impl Scene {
                 }),
                 None => None,
             };
-            let bsdf = Bsdf::from_mtl(m.kd, m.ks, m.ns, m.ni, m.illum);
+            let (kd, ks, kd_texture, w) =
+                conserve_energy(m, kd_texture, &mut textures, &mut tex_paths);
+            if let Some(w) = w.filter(|w| !material_warnings.contains(w)) {
+                material_warnings.push(w);
+            }
+            let bsdf = Bsdf::from_mtl(kd, ks, m.ns, m.ni, m.illum);
             let (emission, emission_table) = if m.emit_one_minus_albedo {
                 let t = AlbedoTable::new(&bsdf);
                 (t.hemispherical(true), Some(Arc::new(t)))
@@ -185,6 +198,7 @@ impl Scene {
         let bounds = desc.bounds();
         let camera = desc.camera.unwrap_or_else(|| default_camera(&bounds));
         let mut warnings = desc.warnings;
+        warnings.extend(material_warnings);
         if lights.is_empty() {
             warnings.push(format!(
                 "scene {} has no emitter: the image will be black",
@@ -277,12 +291,7 @@ pub fn load_desc(spec: &str) -> Result<SceneDesc, String> {
         .map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
         Some("obj") => {
-            if path.is_dir() {
-                return Err(format!("{spec}: is a directory, not an OBJ file"));
-            }
-            if !path.is_file() {
-                return Err(format!("{spec}: no such file"));
-            }
+            // read through `input`: a directory, FIFO or device is named as such
             let mut desc = SceneDesc {
                 name: path
                     .file_stem()
@@ -300,4 +309,50 @@ pub fn load_desc(spec: &str) -> Result<SceneDesc, String> {
             builtin::NAMES.join(", ")
         )),
     }
+}
+
+/// Kd + Ks of a material brought to at most 1 on every band ([`mtl::energy_scale`]; a
+/// textured Kd counts as its mean texel and is scaled by a scaled copy of the texture),
+/// and the material's one warning: its notes from loading plus the scaling, if any.
+/// Returns (Kd, Ks, the Kd texture, the warning).
+fn conserve_energy(
+    m: &MaterialDesc,
+    kd_texture: Option<u32>,
+    textures: &mut Vec<Texture>,
+    tex_paths: &mut Vec<PathBuf>,
+) -> ([f32; 3], [f32; 3], Option<u32>, Option<String>) {
+    let mut notes = m.notes.clone();
+    let (mut kd, mut ks, mut tex) = (m.kd, m.ks, kd_texture);
+    let mean = kd_texture.map(|t| textures[t as usize].mean());
+    if let Some((s, max)) = mtl::energy_scale(m, mean) {
+        let f = |c: [f32; 3]| format!("{} {} {}", c[0], c[1], c[2]);
+        let what = match (m.illum, mean) {
+            (5, _) => format!("mirror Ks {}", f(m.ks)),
+            (_, Some(t)) => format!("Kd (texture mean) {} + Ks {}", f(t), f(m.ks)),
+            _ => format!("Kd {} + Ks {}", f(m.kd), f(m.ks)),
+        };
+        notes.push(format!(
+            "{what} reflects up to {max} on a band, more than it receives: Kd and Ks scaled by {s} to conserve energy"
+        ));
+        kd = kd.map(|v| v * s);
+        ks = ks.map(|v| v * s);
+        if let Some(t) = kd_texture {
+            let mut scaled = textures[t as usize].clone();
+            for texel in &mut scaled.texels {
+                *texel = texel.map(|v| v * s);
+            }
+            textures.push(scaled);
+            tex_paths.push(PathBuf::new()); // never matches a map_Kd path: not shared
+            tex = Some(textures.len() as u32 - 1);
+        }
+    }
+    let warning = (!notes.is_empty()).then(|| {
+        let at = m
+            .source
+            .as_ref()
+            .map(|s| format!("{s}: "))
+            .unwrap_or_default();
+        format!("{at}material '{}': {}", m.name, notes.join("; "))
+    });
+    (kd, ks, tex, warning)
 }

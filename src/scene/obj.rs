@@ -1,5 +1,6 @@
 //! Wavefront OBJ loading with tobj: triangles, quads and n-gons (fan-triangulated),
-//! negative (relative) indices, optional vn/vt, mtllib/usemtl, backslash paths.
+//! negative (relative) indices, optional vn/vt, mtllib/usemtl, backslash paths, a
+//! byte-order mark and any line ends; mirroring transforms keep the front side.
 //! A validation pass first reports bad lines as `file:line: ...` (tobj itself gives
 //! no line numbers), so no input reaches tobj that could make it fail obscurely.
 
@@ -216,7 +217,9 @@ pub fn load_obj_text(
     xf: Mat4,
     desc: &mut SceneDesc,
 ) -> Result<(), String> {
-    let checked = validate(text, file)?;
+    // a byte-order mark and CR-only line ends (Blender, old Mac tools) are not content
+    let text = crate::input::clean_text(text);
+    let checked = validate(&text, file)?;
     // Materials: our own parser, with line numbers.
     let mut mats: Vec<MaterialDesc> = Vec::new();
     // `mtllib a.mtl b.mtl` names two files, but a name may contain spaces too: a
@@ -237,8 +240,8 @@ pub fn load_obj_text(
         let (mtl_text, mtl_name, dir) = match &mtl {
             MtlSource::Dir(dir) => {
                 let p = normalise_path(dir, lib);
-                let t = std::fs::read_to_string(&p)
-                    .map_err(|e| format!("{file}:{line_no}: mtllib {}: {e}", p.display()))?;
+                let t = crate::input::read_text_lossy(&p)
+                    .map_err(|e| format!("{file}:{line_no}: mtllib: {e}"))?;
                 let parent = p.parent().unwrap_or(dir).to_path_buf();
                 (t, p.display().to_string(), parent)
             }
@@ -294,6 +297,12 @@ pub fn load_obj_text(
     desc.materials.extend(mats.iter().cloned());
     let mut default_mat: Option<u32> = None;
     let nxf = Mat4::from_mat3(glam::Mat3::from_mat4(xf).inverse().transpose());
+    // A transform that swaps handedness (a mirror: negative determinant) turns every
+    // counter-clockwise triangle clockwise: the front side, where emitters emit, would
+    // face the other way. Swap two corners to keep it where the transformed normals
+    // point (pbrt flips orientation the same way).
+    let mirrored = glam::Mat3::from_mat4(xf).determinant() < 0.0;
+    let order = |c: [usize; 3]| if mirrored { [c[0], c[2], c[1]] } else { c };
     let mut tri_index = 0;
     for model in &models {
         let mesh = &model.mesh;
@@ -341,6 +350,10 @@ pub fn load_obj_text(
             } else {
                 None
             };
+            let k = order([0, 1, 2]);
+            let v = k.map(|i| v[i]);
+            let n = n.map(|n| k.map(|i| n[i]));
+            let uv = uv.map(|uv| k.map(|i| uv[i]));
             desc.push_triangle(v, n, uv, mat);
         }
     }
@@ -350,8 +363,7 @@ pub fn load_obj_text(
 
 /// Load an OBJ file from disk.
 pub fn load_obj_file(path: &Path, xf: Mat4, desc: &mut SceneDesc) -> Result<(), String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let text = String::from_utf8_lossy(&bytes);
+    let text = crate::input::read_text_lossy(path)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     load_obj_text(
         &text,

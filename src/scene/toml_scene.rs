@@ -79,7 +79,7 @@ struct MaterialOverride {
 
 pub fn load(path: &Path) -> Result<SceneDesc, String> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: {e}"))?;
+    let text = crate::input::read_text(path)?;
     parse(&text, &file, path.parent().unwrap_or(Path::new(".")))
 }
 
@@ -100,6 +100,7 @@ pub fn toml_error(file: &str, text: &str, e: toml::de::Error) -> String {
 }
 
 pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
+    let text = &*crate::input::clean_text(text);
     let sf: SceneFile = toml::from_str(text).map_err(|e| toml_error(file, text, e))?;
     if sf.objects.is_empty() {
         return Err(format!(
@@ -138,9 +139,8 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
         );
         let xf = Mat4::from_scale_rotation_translation(s, q, t);
         let p = super::mtl::normalise_path(dir, &o.file);
-        if !p.is_file() {
-            return Err(format!("{file}: object file {}: no such file", p.display()));
-        }
+        crate::input::check_regular_file(&p, crate::input::max_input_bytes()?)
+            .map_err(|e| format!("{file}: object file {e}"))?;
         super::obj::load_obj_file(&p, xf, &mut desc)?;
     }
     for (name, ov) in &sf.materials {
@@ -178,6 +178,17 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             }
             if let Some(v) = ov.illum {
                 m.illum = v;
+                if v > 10 {
+                    m.notes.push(format!(
+                        "illum {v} (from {file} materials.{name}) is not an MTL illumination model (0 to 10): rendered as diffuse + glossy from Kd and Ks"
+                    ));
+                }
+            }
+            if (ov.illum.is_some() || ov.ni.is_some()) && m.illum == 7 && m.ni <= 0.0 {
+                m.notes.push(format!(
+                    "glass (illum 7) with Ni {} (from {file} materials.{name}): an index of refraction must be positive; rendered with 1.5",
+                    m.ni
+                ));
             }
         }
         if !found {
