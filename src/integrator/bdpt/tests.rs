@@ -329,6 +329,11 @@ fn furnace_is_one() {
         };
         let img = render_bdpt::<3>(&scene, 8, 8, 48, 20, &settings(RrMode::Classic, -1), o);
         assert_furnace(&img, &format!("{name} power heuristic"));
+        // a lobe selection of the roulette paper (the MIS densities stay the mixture's)
+        let mut set = settings(RrMode::Spectral, -1);
+        set.roulette.select = crate::integrator::BsdfSelect::Mis;
+        let img = render_bdpt::<8>(&scene, 8, 8, 48, 21, &set, BdptOptions::default());
+        assert_furnace(&img, &format!("{name} 8 bands, spectral, bsdf-select mis"));
     }
 }
 
@@ -384,19 +389,17 @@ fn light_tracing_agrees_with_the_path_tracer() {
     }
 }
 
-#[test]
-fn bdpt_agrees_with_the_path_tracer_per_pixel() {
-    let scene = scene::load("cornell").unwrap();
+/// BDPT at `spp` against the path tracer at 16 x `spp` (a reference with its own seed: the
+/// path tracer's skewed pixel distributions at equal spp make its low tail too rare for a
+/// fair per-pixel test): per-pixel z-tests with a multiple-comparison bound, and the
+/// image mean within 3 standard errors.
+fn agree_per_pixel(name: &str, w: u32, h: u32, spp: u32) {
+    let scene = scene::load(name).unwrap();
     let set = settings(RrMode::Classic, -1);
-    let (w, h) = (16, 16);
-    let spp: u32 = std::env::var("KALOS_SPP")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(128);
     let a = render_bdpt::<3>(&scene, w, h, spp, 3, &set, BdptOptions::default());
-    let b = render_path::<3>(&scene, w, h, spp, 4, &set);
-    let mut big = 0;
-    let mut worst = 0.0f64;
+    let b = render_path::<3>(&scene, w, h, 16 * spp, 4, &set);
+    let tests = (w * h * 3) as f64;
+    let (mut big, mut worst) = (0, 0.0f64);
     for i in 0..(w * h) as usize {
         for c in 0..3 {
             let v = a.var[i][c] + b.var[i][c];
@@ -407,45 +410,62 @@ fn bdpt_agrees_with_the_path_tracer_per_pixel() {
             };
             worst = worst.max(z.abs());
             if z.abs() > 3.0 {
-                eprintln!(
-                    "pixel {i} channel {c}: z {z:.2}: bdpt {} +- {}, path {} +- {}",
-                    a.mean[i][c],
-                    a.var[i][c].sqrt(),
-                    b.mean[i][c],
-                    b.var[i][c].sqrt()
-                );
                 big += 1;
             }
         }
     }
-    for c in 0..3 {
-        eprintln!(
-            "channel {c}: bdpt {} +- {}, path {} +- {}",
-            a.img_mean[c], a.img_se[c], b.img_mean[c], b.img_se[c]
-        );
-    }
-    // 768 tests: about 2 beyond 3 sigma by chance; Bonferroni at 1%: 4.4 sigma.
+    // 0.27% of the tests beyond 3 sigma by chance (allow 3x that + 2); Bonferroni at 1%
+    // for the worst: 4.4 sigma for 768 tests (allow 4.8).
+    let allowed = (3.0 * 0.0027 * tests) as usize + 2;
     assert!(
-        big <= 8 && worst < 4.8,
-        "{big} pixels beyond 3 se, worst {worst}"
+        big <= allowed && worst < 4.8,
+        "{name}: {big} of {tests} beyond 3 se (allowed {allowed}), worst {worst}"
     );
     for c in 0..3 {
         let z =
             (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
         assert!(
             z.abs() < 3.0,
-            "channel {c}: image means {} vs {} (z {z})",
+            "{name} channel {c}: image means {} vs {} (z {z})",
             a.img_mean[c],
             b.img_mean[c]
         );
     }
-    // BDPT is the better estimator here: its image-mean error is not larger.
-    assert!(
-        a.img_se[1] < 1.5 * b.img_se[1],
-        "{:?} vs {:?}",
-        a.img_se,
-        b.img_se
-    );
+}
+
+#[test]
+fn bdpt_agrees_with_the_path_tracer_per_pixel() {
+    agree_per_pixel("cornell", 16, 16, 128);
+    agree_per_pixel("cornell-glossy", 8, 8, 128);
+}
+
+#[test]
+fn caustic_agrees_with_the_path_tracer() {
+    // Glass with smooth shading normals, Dirac vertices on both subpaths: image means of
+    // BDPT and of the path tracer at 16x the samples (about 8x the time).
+    let scene = scene::load("caustic").unwrap();
+    let set = settings(RrMode::Classic, -1);
+    let a = render_bdpt::<3>(&scene, 8, 8, 256, 3, &set, BdptOptions::default());
+    let b = render_path::<3>(&scene, 8, 8, 16 * 256, 4, &set);
+    for c in 0..3 {
+        let z =
+            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
+        assert!(
+            z.abs() < 3.0,
+            "channel {c}: bdpt {} +- {}, path {} +- {}",
+            a.img_mean[c],
+            a.img_se[c],
+            b.img_mean[c],
+            b.img_se[c]
+        );
+        // and BDPT's error is well below the path tracer's at 1/16 of the samples
+        assert!(
+            a.img_se[c] < 0.6 * b.img_se[c],
+            "{:?} vs {:?}",
+            a.img_se,
+            b.img_se
+        );
+    }
 }
 
 #[test]
@@ -582,4 +602,66 @@ fn bdpt_speed() {
             tb / tp
         );
     }
+}
+
+/// Diagnostic: BDPT and the path tracer at `KALOS_SPP` against a path-traced reference at
+/// 16x that (`cargo test --release --lib bdpt_vs_reference -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn bdpt_vs_reference() {
+    let scene = scene::load("cornell").unwrap();
+    let set = settings(RrMode::Classic, -1);
+    let spp: u32 = std::env::var("KALOS_SPP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(256);
+    let (w, h) = (16, 16);
+    let r = render_path::<3>(&scene, w, h, spp * 16, 99, &set);
+    let a = render_bdpt::<3>(&scene, w, h, spp, 3, &set, BdptOptions::default());
+    let b = render_path::<3>(&scene, w, h, spp, 4, &set);
+    for (name, x) in [("bdpt", &a), ("path", &b)] {
+        let (mut hi, mut lo, mut zs) = (0, 0, 0.0f64);
+        for i in 0..(w * h) as usize {
+            for c in 0..3 {
+                let v = x.var[i][c] + r.var[i][c];
+                let z = if v > 0.0 {
+                    (x.mean[i][c] - r.mean[i][c]) / v.sqrt()
+                } else {
+                    0.0
+                };
+                zs += z;
+                if z > 3.0 {
+                    hi += 1;
+                }
+                if z < -3.0 {
+                    lo += 1;
+                }
+            }
+        }
+        println!(
+            "{name}: {hi} above 3 se, {lo} below, mean z {:.3}",
+            zs / 768.0
+        );
+    }
+}
+
+/// Diagnostic: image means on `caustic` (`-- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn caustic_means() {
+    let scene = scene::load("caustic").unwrap();
+    let set = settings(RrMode::Classic, -1);
+    let spp: u32 = std::env::var("KALOS_SPP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(256);
+    let (w, h) = (8, 8);
+    let t0 = std::time::Instant::now();
+    let a = render_bdpt::<3>(&scene, w, h, spp, 3, &set, BdptOptions::default());
+    let ta = t0.elapsed().as_secs_f64();
+    let t0 = std::time::Instant::now();
+    let b = render_path::<3>(&scene, w, h, 16 * spp, 4, &set);
+    let tb = t0.elapsed().as_secs_f64();
+    println!("bdpt {:?} +- {:?} in {ta:.2}s", a.img_mean, a.img_se);
+    println!("path {:?} +- {:?} in {tb:.2}s", b.img_mean, b.img_se);
 }
