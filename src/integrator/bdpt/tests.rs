@@ -469,6 +469,83 @@ fn caustic_agrees_with_the_path_tracer() {
 }
 
 #[test]
+fn unweighted_strategies_converge_to_the_same_image() {
+    // For a fixed path length every strategy alone (unweighted) estimates the same light:
+    // on cornell, paths of 3 vertices (direct light) and of 4 (one bounce), the image mean
+    // of each strategy (s, t) with s + t = k agrees with the others' (z-tests).
+    let scene = scene::load("cornell").unwrap();
+    let (w, h, spp) = (8u32, 8u32, 384u32);
+    let cam = Camera::new(scene.camera, w, h);
+    let set = settings(RrMode::Off, 3);
+    let cfg = SamplerConfig {
+        kind: SamplerKind::Random,
+        seed: 17,
+        dependent: false,
+    };
+    let npix = (w * h) as f64;
+    // per (s, t): sum and sum of squares of the passes' image means
+    let mut acc: std::collections::HashMap<(u32, u32), (f64, f64)> = Default::default();
+    for j in 0..spp {
+        let mut pass: std::collections::HashMap<(u32, u32), f64> = Default::default();
+        for y in 0..h {
+            for x in 0..w {
+                let mut s = SampleStream::new(&cfg, 0, y * w + x, j);
+                let mut c = Counters::default();
+                sample_pixel_with::<3>(
+                    &scene,
+                    &cam,
+                    x,
+                    y,
+                    &mut s,
+                    &set,
+                    &BdptOptions::default(),
+                    &mut c,
+                    &mut |_, _| {},
+                    Some(&mut |st: StrategySample| {
+                        let v = st.unweighted.iter().sum::<f32>() as f64 / 3.0;
+                        *pass.entry((st.s, st.t)).or_default() += v / npix;
+                    }),
+                );
+            }
+        }
+        for k in 3..=4u32 {
+            for t in 1..=k {
+                let e = acc.entry((k - t, t)).or_default();
+                let v = pass.get(&(k - t, t)).copied().unwrap_or(0.0);
+                e.0 += v;
+                e.1 += v * v;
+            }
+        }
+    }
+    let n = spp as f64;
+    let stat = |st: (u32, u32)| {
+        let (s1, s2) = acc[&st];
+        let m = s1 / n;
+        (m, ((s2 / n - m * m) / (n - 1.0)).max(0.0).sqrt())
+    };
+    for k in 3..=4u32 {
+        let strategies: Vec<(u32, u32)> = (1..=k)
+            .map(|t| (k - t, t))
+            .filter(|&(s, t)| !(s == 1 && t == 1))
+            .collect();
+        for &a in &strategies {
+            eprintln!("length {k} {a:?}: {:?}", stat(a));
+        }
+        for (i, &a) in strategies.iter().enumerate() {
+            for &b in &strategies[i + 1..] {
+                let ((ma, sa), (mb, sb)) = (stat(a), stat(b));
+                assert!(ma > 0.0 && mb > 0.0, "{a:?} {ma} {b:?} {mb}");
+                let z = (ma - mb) / (sa * sa + sb * sb).sqrt();
+                assert!(
+                    z.abs() < 3.5,
+                    "length {k}: {a:?} {ma} +- {sa} vs {b:?} {mb} +- {sb} (z {z:.2})"
+                );
+            }
+        }
+    }
+}
+
+#[test]
 fn max_depth_limits_the_whole_path() {
     // max_depth 2 = direct light only: BDPT and the path tracer agree on it, and
     // max_depth 1 shows only the emitter.
