@@ -344,36 +344,8 @@ fn caustic() -> SceneDesc {
             housing,
         );
     }
-    // The glass sphere: a latitude-longitude mesh with its exact normals, wound outwards.
-    let (c, r) = (v(0.0, 0.24, 0.0), 0.3f32);
-    let (stacks, slices) = (24u32, 48u32);
-    let n = |i: u32, j: u32| {
-        let th = std::f32::consts::PI * i as f32 / stacks as f32;
-        let ph = 2.0 * std::f32::consts::PI * j as f32 / slices as f32;
-        v(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin())
-    };
-    let tri = |d: &mut SceneDesc, ns: [Vec3; 3]| {
-        let mut ns = ns;
-        let p = |k: usize, ns: &[Vec3; 3]| c + ns[k] * r;
-        let outward = (p(1, &ns) - p(0, &ns))
-            .cross(p(2, &ns) - p(0, &ns))
-            .dot(ns[0] + ns[1] + ns[2]);
-        if outward < 0.0 {
-            ns.swap(1, 2);
-        }
-        d.push_triangle([p(0, &ns), p(1, &ns), p(2, &ns)], Some(ns), None, glass);
-    };
-    for i in 0..stacks {
-        for j in 0..slices {
-            let (a, b, cc, e) = (n(i, j), n(i + 1, j), n(i + 1, j + 1), n(i, j + 1));
-            if i > 0 {
-                tri(&mut d, [a, b, e]);
-            }
-            if i + 1 < stacks {
-                tri(&mut d, [e, b, cc]);
-            }
-        }
-    }
+    // The glass sphere, with its exact normals.
+    push_sphere(&mut d, v(0.0, 0.24, 0.0), 0.3, 24, 48, glass);
     d.camera = Some(CameraDesc {
         origin: [0.35, 0.15, 0.97],
         target: [-0.05, -0.6, -0.15],
@@ -386,4 +358,35 @@ fn caustic() -> SceneDesc {
         max_depth: None,
     };
     d
+}
+
+/// A latitude-longitude sphere of `stacks` x `slices` with its exact (smooth) normals,
+/// wound outwards: slices x (2 stacks - 2) triangles.
+pub fn push_sphere(d: &mut SceneDesc, c: Vec3, r: f32, stacks: u32, slices: u32, mat: u32) {
+    let n = |i: u32, j: u32| {
+        let th = std::f32::consts::PI * i as f32 / stacks as f32;
+        let ph = 2.0 * std::f32::consts::PI * j as f32 / slices as f32;
+        Vec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin())
+    };
+    let tri = |d: &mut SceneDesc, mut ns: [Vec3; 3]| {
+        let p = |k: usize, ns: &[Vec3; 3]| c + ns[k] * r;
+        let outward = (p(1, &ns) - p(0, &ns))
+            .cross(p(2, &ns) - p(0, &ns))
+            .dot(ns[0] + ns[1] + ns[2]);
+        if outward < 0.0 {
+            ns.swap(1, 2);
+        }
+        d.push_triangle([p(0, &ns), p(1, &ns), p(2, &ns)], Some(ns), None, mat);
+    };
+    for i in 0..stacks {
+        for j in 0..slices {
+            let (a, b, cc, e) = (n(i, j), n(i + 1, j), n(i + 1, j + 1), n(i, j + 1));
+            if i > 0 {
+                tri(d, [a, b, e]);
+            }
+            if i + 1 < stacks {
+                tri(d, [e, b, cc]);
+            }
+        }
+    }
 }
