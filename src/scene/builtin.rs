@@ -348,7 +348,7 @@ fn caustic() -> SceneDesc {
     push_sphere(&mut d, v(0.0, 0.24, 0.0), 0.3, 24, 48, glass);
     d.camera = Some(CameraDesc {
         origin: [0.35, 0.15, 0.97],
-        target: [-0.05, -0.6, -0.15],
+        target: [0.0, -0.4, -0.05],
         up: [0.0, 1.0, 0.0],
         fov: 70.0,
     });

@@ -840,3 +840,77 @@ fn shading_normals_seeds() {
         println!("seed {seed}: light tracing z {:.2}, bdpt z {:.2} (path se {:.2e}, lt se {:.2e}, bdpt se {:.2e})", z(&a), z(&m), b.img_se[0], a.img_se[0], m.img_se[0]);
     }
 }
+
+/// Diagnostic: efficiency 1 / (mean per-pixel variance x time) of BDPT against the path
+/// tracer (variance from the passes; single-threaded, same loop), and PNGs of both in /tmp
+/// (`cargo test --release --lib bdpt_efficiency -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn bdpt_efficiency() {
+    let set = settings(RrMode::Classic, -1);
+    for (name, w, spp_b, spp_p) in [("cornell", 32, 64, 256), ("caustic", 32, 64, 256)] {
+        let scene = scene::load(name).unwrap();
+        let t0 = std::time::Instant::now();
+        let a = render_bdpt::<3>(&scene, w, w, spp_b, 1, &set, BdptOptions::default());
+        let ta = t0.elapsed().as_secs_f64();
+        let t0 = std::time::Instant::now();
+        let b = render_path::<3>(&scene, w, w, spp_p, 2, &set);
+        let tb = t0.elapsed().as_secs_f64();
+        let mv = |x: &Img| {
+            x.var
+                .iter()
+                .map(|v| (v[0] + v[1] + v[2]) / 3.0)
+                .sum::<f64>()
+                / x.var.len() as f64
+        };
+        let (va, vb) = (mv(&a), mv(&b));
+        println!(
+            "{name} {w}x{w}: bdpt {spp_b} spp {ta:.2}s var {va:.3e}; path {spp_p} spp {tb:.2}s var {vb:.3e}; efficiency bdpt/path {:.2}",
+            (vb * tb) / (va * ta)
+        );
+        for (tag, x, ww) in [("bdpt", &a, w), ("path", &b, w)] {
+            let data = x
+                .mean
+                .iter()
+                .map(|m| [m[0] as f32, m[1] as f32, m[2] as f32])
+                .collect();
+            let img = crate::image_io::RgbImage::new(ww, ww, data);
+            crate::image_io::write_image(
+                std::path::Path::new(&format!("/tmp/{name}-{tag}.png")),
+                &img,
+                0.0,
+                &[],
+            )
+            .unwrap();
+        }
+    }
+    let scene = scene::load("caustic").unwrap();
+    let a = render_bdpt::<3>(&scene, 128, 128, 16, 1, &set, BdptOptions::default());
+    let data = a
+        .mean
+        .iter()
+        .map(|m| [m[0] as f32, m[1] as f32, m[2] as f32])
+        .collect();
+    let img = crate::image_io::RgbImage::new(128, 128, data);
+    crate::image_io::write_image(
+        std::path::Path::new("/tmp/caustic-bdpt-128.png"),
+        &img,
+        0.0,
+        &[],
+    )
+    .unwrap();
+    let b = render_path::<3>(&scene, 128, 128, 64, 2, &set);
+    let data = b
+        .mean
+        .iter()
+        .map(|m| [m[0] as f32, m[1] as f32, m[2] as f32])
+        .collect();
+    let img = crate::image_io::RgbImage::new(128, 128, data);
+    crate::image_io::write_image(
+        std::path::Path::new("/tmp/caustic-path-128.png"),
+        &img,
+        0.0,
+        &[],
+    )
+    .unwrap();
+}
