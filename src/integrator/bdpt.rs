@@ -30,6 +30,10 @@
 //! is played here as its classic (or spectral) base: its L~ term has no meaning on a
 //! bidirectional path.
 //!
+//! Cost: a sample evaluates O(s t) strategies of O(s + t) each, so without roulette and
+//! without a max depth (subpaths of up to `HARD_MAX_DEPTH` vertices in a closed room) it
+//! is impractical: use a roulette or `--max-depth` with `--rr off`.
+//!
 //! Every decision uses fixed dimensions of the `SampleStream` (see `dims`), so the result
 //! is a pure function of the inputs: the same on any number of threads.
 
