@@ -8,6 +8,7 @@
 //! sample, which returns the value of that sample for its own pixel and may send any
 //! number of splats to other pixels through a `SplatSink`.
 
+pub mod bdpt;
 pub mod path;
 pub mod rr;
 

@@ -23,6 +23,7 @@ pub const NAMES: &[&str] = &[
     "furnace",
     "furnace-glossy",
     "room",
+    "caustic",
 ];
 
 /// One line per built-in scene, for `kalos scenes`.
@@ -48,6 +49,7 @@ pub fn describe() -> Vec<(&'static str, &'static str)> {
             "room",
             "architectural interior like the DTF paper's: large walls, furniture, glossy floor, 600x600",
         ),
+        ("caustic", "room lit by a lamp whose light leaves only through a glass sphere: a caustic on the floor, 256x256"),
     ]
 }
 
@@ -268,6 +270,123 @@ pub fn load(name: &str) -> Result<Option<SceneDesc>, String> {
         "furnace" => Some(furnace()),
         "furnace-glossy" => Some(furnace_glossy()),
         "room" => Some(room()?),
+        "caustic" => Some(caustic()),
         _ => None,
     })
+}
+
+/// `caustic`: path tracing's hard case. A 2 m room (red left wall, blue right wall, white
+/// otherwise) with a lamp under its ceiling: a small emitter (0.2 m square, facing down)
+/// inside a black housing whose bottom plate has a 0.24 m square opening, and under the
+/// opening a glass sphere (radius 0.3, index 1.5, smooth normals) that every ray leaving
+/// the opening meets. The light reaches the room only through the sphere, which focuses
+/// it into a caustic on the floor; a diffuse point there sees the emitter only through
+/// glass, so next-event estimation never reaches it and the path tracer finds the light
+/// only by chance. 2,238 triangles.
+fn caustic() -> SceneDesc {
+    let mut d = SceneDesc {
+        name: "caustic".into(),
+        ..Default::default()
+    };
+    let mat = |name: &str, kd: [f32; 3]| {
+        let mut m = MaterialDesc::named(name);
+        m.kd = kd;
+        m
+    };
+    d.materials.push(mat("white", [0.7, 0.7, 0.7]));
+    d.materials.push(mat("red", [0.7, 0.15, 0.1]));
+    d.materials.push(mat("blue", [0.15, 0.35, 0.7]));
+    let mut light = mat("light", [0.0; 3]);
+    light.ke = [150.0, 135.0, 115.0];
+    d.materials.push(light);
+    d.materials.push(mat("housing", [0.0, 0.0, 0.0]));
+    let mut glass = MaterialDesc::named("glass");
+    glass.illum = 7;
+    glass.ni = 1.5;
+    glass.kd = [0.0; 3];
+    d.materials.push(glass);
+    let (white, red, blue, light, housing, glass) = (0, 1, 2, 3, 4, 5);
+    inward_box(&mut d, [red, blue, white, white, white, white], 1);
+
+    let v = Vec3::new;
+    // The emitter, facing down, just under the ceiling.
+    let (a, y) = (0.1, 0.995);
+    push_quad(
+        &mut d,
+        [v(-a, y, -a), v(a, y, -a), v(a, y, a), v(-a, y, a)],
+        light,
+    );
+    // The housing: four side walls from the ceiling down to the plate at y = 0.55, and
+    // the plate around a square opening of half-width 0.12.
+    let (h, o, yb, yt) = (0.3, 0.12, 0.55, 1.0);
+    for (p, q) in [
+        (v(-h, 0.0, -h), v(h, 0.0, -h)),
+        (v(h, 0.0, -h), v(h, 0.0, h)),
+        (v(h, 0.0, h), v(-h, 0.0, h)),
+        (v(-h, 0.0, h), v(-h, 0.0, -h)),
+    ] {
+        let up = |w: Vec3, y: f32| v(w.x, y, w.z);
+        push_quad(
+            &mut d,
+            [up(p, yb), up(q, yb), up(q, yt), up(p, yt)],
+            housing,
+        );
+    }
+    for (x0, x1, z0, z1) in [
+        (-h, h, -h, -o),
+        (-h, h, o, h),
+        (-h, -o, -o, o),
+        (o, h, -o, o),
+    ] {
+        push_quad(
+            &mut d,
+            [v(x0, yb, z0), v(x0, yb, z1), v(x1, yb, z1), v(x1, yb, z0)],
+            housing,
+        );
+    }
+    // The glass sphere, with its exact normals.
+    push_sphere(&mut d, v(0.0, 0.24, 0.0), 0.3, 24, 48, glass);
+    d.camera = Some(CameraDesc {
+        origin: [0.35, 0.15, 0.97],
+        target: [0.0, -0.4, -0.05],
+        up: [0.0, 1.0, 0.0],
+        fov: 70.0,
+    });
+    d.defaults = RenderDefaults {
+        res: Some((256, 256)),
+        spp: None,
+        max_depth: None,
+    };
+    d
+}
+
+/// A latitude-longitude sphere of `stacks` x `slices` with its exact (smooth) normals,
+/// wound outwards: slices x (2 stacks - 2) triangles.
+pub fn push_sphere(d: &mut SceneDesc, c: Vec3, r: f32, stacks: u32, slices: u32, mat: u32) {
+    let n = |i: u32, j: u32| {
+        let th = std::f32::consts::PI * i as f32 / stacks as f32;
+        let ph = 2.0 * std::f32::consts::PI * j as f32 / slices as f32;
+        Vec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin())
+    };
+    let tri = |d: &mut SceneDesc, mut ns: [Vec3; 3]| {
+        let p = |k: usize, ns: &[Vec3; 3]| c + ns[k] * r;
+        let outward = (p(1, &ns) - p(0, &ns))
+            .cross(p(2, &ns) - p(0, &ns))
+            .dot(ns[0] + ns[1] + ns[2]);
+        if outward < 0.0 {
+            ns.swap(1, 2);
+        }
+        d.push_triangle([p(0, &ns), p(1, &ns), p(2, &ns)], Some(ns), None, mat);
+    };
+    for i in 0..stacks {
+        for j in 0..slices {
+            let (a, b, cc, e) = (n(i, j), n(i + 1, j), n(i + 1, j + 1), n(i, j + 1));
+            if i > 0 {
+                tri(d, [a, b, e]);
+            }
+            if i + 1 < stacks {
+                tri(d, [e, b, cc]);
+            }
+        }
+    }
 }

@@ -1,6 +1,14 @@
 //! Pinhole perspective camera: origin, target, up, vertical field of view, resolution.
+//!
+//! Camera importance for light tracing and bidirectional path tracing (Veach's thesis,
+//! section 10.2; pbrt-v4 `PerspectiveCamera::We`): the film is the plane at unit distance
+//! along the view direction, of area A = (2 tan(fov/2) aspect)(2 tan(fov/2)). A camera ray
+//! through a uniform film point has solid-angle density p(w) = 1 / (A cos^3 theta), and
+//! W_e(w) = 1 / (A cos^4 theta): with one light path per camera sample, the splats a pixel
+//! receives divided by its sample count estimate the same pixel value as its camera rays
+//! (the mean radiance over the pixel). The position is a Dirac point (pdf 1 by convention).
 
-use crate::math::{Ray, Vec3};
+use crate::math::{Ray, Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CameraDesc {
@@ -101,5 +109,174 @@ impl Camera {
         let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_half;
         let d = (self.forward + sx * self.right + sy * self.up).normalize();
         Ray::new(self.origin, d)
+    }
+}
+
+/// A direction sampled from a reference point towards the camera (`Camera::sample_wi`).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraWi {
+    /// Unit direction from the reference point to the camera.
+    pub wi: Vec3,
+    /// Distance from the reference point to the camera.
+    pub dist: f32,
+    /// Film position the ray from the camera to the point lands on.
+    pub raster: Vec2,
+    /// W_e of that ray.
+    pub we: f32,
+    /// Density of the camera position, converted to solid angle at the reference point:
+    /// dist^2 / cos theta (the camera position is a Dirac point).
+    pub pdf: f32,
+}
+
+impl Camera {
+    /// The pinhole.
+    #[inline]
+    pub fn position(&self) -> Vec3 {
+        self.origin
+    }
+
+    /// Unit view direction (the normal of the film plane).
+    #[inline]
+    pub fn forward(&self) -> Vec3 {
+        self.forward
+    }
+
+    /// A: area of the film plane at unit distance.
+    #[inline]
+    pub fn film_area(&self) -> f32 {
+        4.0 * self.tan_half * self.tan_half * self.aspect
+    }
+
+    /// Film position (pixels, y = 0 at the top) of the camera ray along world direction `d`
+    /// (any length), the inverse of `ray`; None if it leaves the image.
+    #[inline]
+    pub fn raster(&self, d: Vec3) -> Option<Vec2> {
+        let z = d.dot(self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        let sx = d.dot(self.right) / z;
+        let sy = d.dot(self.up) / z;
+        let x = (sx / (self.tan_half * self.aspect) + 1.0) * 0.5 * self.width as f32;
+        let y = (1.0 - sy / self.tan_half) * 0.5 * self.height as f32;
+        let inside = x >= 0.0 && x < self.width as f32 && y >= 0.0 && y < self.height as f32;
+        inside.then_some(Vec2::new(x, y))
+    }
+
+    /// W_e(w) = 1 / (A cos^4 theta) of the camera ray along unit direction `w` (0 outside
+    /// the image).
+    #[inline]
+    pub fn we(&self, w: Vec3) -> f32 {
+        if self.raster(w).is_none() {
+            return 0.0;
+        }
+        let c = w.dot(self.forward);
+        1.0 / (self.film_area() * c * c * c * c)
+    }
+
+    /// Densities of `ray`'s sampling for unit direction `w`: (position, solid angle) =
+    /// (1, 1 / (A cos^3 theta)), or (1, 0) outside the image.
+    #[inline]
+    pub fn pdf_we(&self, w: Vec3) -> (f32, f32) {
+        if self.raster(w).is_none() {
+            return (1.0, 0.0);
+        }
+        let c = w.dot(self.forward);
+        (1.0, 1.0 / (self.film_area() * c * c * c))
+    }
+
+    /// Connect reference point `p` to the camera: the direction, the film position, W_e
+    /// and the density of the camera position in solid angle at `p`. None if `p` is
+    /// outside the view (or at the pinhole).
+    #[inline]
+    pub fn sample_wi(&self, p: Vec3) -> Option<CameraWi> {
+        let d = self.origin - p;
+        let dist2 = d.length_squared();
+        if dist2 <= 0.0 || !dist2.is_finite() {
+            return None;
+        }
+        let dist = dist2.sqrt();
+        let wi = d / dist;
+        let raster = self.raster(-wi)?;
+        let cos = (-wi).dot(self.forward);
+        let we = 1.0 / (self.film_area() * cos * cos * cos * cos);
+        Some(CameraWi {
+            wi,
+            dist,
+            raster,
+            we,
+            pdf: dist2 / cos,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::chi2::{assert_chi2, chi2_sphere, TestRng};
+
+    fn cam(w: u32, h: u32) -> Camera {
+        Camera::new(
+            CameraDesc {
+                origin: [0.3, -0.2, 1.5],
+                target: [-0.1, 0.4, -1.0],
+                up: [0.0, 1.0, 0.0],
+                fov: 60.0,
+            },
+            w,
+            h,
+        )
+    }
+
+    #[test]
+    fn raster_inverts_ray() {
+        let c = cam(40, 25);
+        let mut rng = TestRng::new(5);
+        for _ in 0..1000 {
+            let (x, y) = (rng.next_f32() * 40.0, rng.next_f32() * 25.0);
+            let r = c.raster(c.ray(x, y).d).unwrap();
+            assert!(
+                (r.x - x).abs() < 1e-3 && (r.y - y).abs() < 1e-3,
+                "{x} {y} {r}"
+            );
+        }
+        assert!(c.raster(-c.forward()).is_none());
+        assert!(c.raster(c.ray(-0.5, 3.0).d).is_none());
+        assert!(c.raster(c.ray(3.0, 25.5).d).is_none());
+        // pixel (0, 0) is the top left: up is towards y = 0
+        let top = c.raster(c.forward() + 0.1 * c.up).unwrap();
+        assert!(top.y < 12.5 && (top.x - 20.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn chi2_camera_ray_directions() {
+        let c = cam(32, 24);
+        let r = chi2_sphere(
+            |_, u| Some(c.ray(u.x * 32.0, u.y * 24.0).d),
+            |w| c.pdf_we(w).1,
+            300_000,
+            11,
+        );
+        assert_chi2("camera rays", &r);
+        assert!((r.pdf_integral - 1.0).abs() < 1e-2, "{}", r.pdf_integral);
+    }
+
+    #[test]
+    fn importance_integrates_to_one_over_the_image() {
+        // integral of W_e cos theta dw over the image = 1: the ratio W_e cos / p = 1 for
+        // every camera ray, and sample_wi's W_e / pdf is the same per unit area.
+        let c = cam(30, 20);
+        let mut rng = TestRng::new(9);
+        for _ in 0..200 {
+            let d = c.ray(rng.next_f32() * 30.0, rng.next_f32() * 20.0).d;
+            let ratio = c.we(d) * d.dot(c.forward()) / c.pdf_we(d).1;
+            assert!((ratio - 1.0).abs() < 1e-4, "{ratio}");
+            let p = c.position() + d * (0.5 + 3.0 * rng.next_f32());
+            let s = c.sample_wi(p).unwrap();
+            assert!((s.wi + d).length() < 1e-4);
+            assert!((s.we - c.we(d)).abs() <= 1e-4 * s.we);
+            let r = c.raster(d).unwrap();
+            assert!((s.raster - r).length() < 1e-3);
+        }
     }
 }

@@ -1,0 +1,916 @@
+//! Tests of the bidirectional path tracer: the MIS weights of all strategies of a path sum
+//! to 1 (and equal the explicit balance / power heuristic), the furnace rooms give 1, light
+//! tracing alone and BDPT agree with the path tracer (z-tests on means with standard
+//! errors estimated from independent passes over the image).
+
+use super::*;
+use crate::integrator::{path, IntegratorKind, Roulette};
+use crate::sampling::{SamplerConfig, SamplerKind};
+use crate::scene::{self, Scene};
+
+/// An image rendered by independent passes: pass j gives every pixel one camera sample
+/// (sample index j) and its splats, so a pixel's pass values are i.i.d. and its film value
+/// (mean of the samples + splats / spp) is their mean.
+pub(crate) struct Img {
+    pub w: u32,
+    pub _h: u32,
+    pub mean: Vec<[f64; 3]>,
+    /// Variance of the mean, per pixel.
+    pub var: Vec<[f64; 3]>,
+    /// Image mean and its standard error (from the passes' image means).
+    pub img_mean: [f64; 3],
+    pub img_se: [f64; 3],
+}
+
+/// The test-only render loop with the film's convention: pixel value = mean of its
+/// returned samples + (sum of the splats that landed in it) / spp.
+pub(crate) fn render(
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    spp: u32,
+    seed: u64,
+    mut f: impl FnMut(&Camera, u32, u32, &mut SampleStream, &mut dyn FnMut(Vec2, [f32; 3])) -> [f32; 3],
+) -> Img {
+    let cam = Camera::new(scene.camera, w, h);
+    let cfg = SamplerConfig {
+        kind: SamplerKind::Random,
+        seed,
+        dependent: false,
+    };
+    let n = (w * h) as usize;
+    let mut sum = vec![[0.0f64; 3]; n];
+    let mut sum2 = vec![[0.0f64; 3]; n];
+    let (mut isum, mut isum2) = ([0.0f64; 3], [0.0f64; 3]);
+    let mut pass = vec![[0.0f64; 3]; n];
+    for j in 0..spp {
+        pass.iter_mut().for_each(|p| *p = [0.0; 3]);
+        for y in 0..h {
+            for x in 0..w {
+                let pix = (y * w + x) as usize;
+                let mut s = SampleStream::new(&cfg, 0, pix as u32, j);
+                let mut splats: Vec<(Vec2, [f32; 3])> = Vec::new();
+                let v = f(&cam, x, y, &mut s, &mut |r, c| splats.push((r, c)));
+                for c in 0..3 {
+                    pass[pix][c] += v[c] as f64;
+                }
+                for (r, v) in splats {
+                    let (px, py) = (r.x.floor() as i64, r.y.floor() as i64);
+                    assert!(px >= 0 && py >= 0 && px < w as i64 && py < h as i64, "{r}");
+                    let q = (py as u32 * w + px as u32) as usize;
+                    for c in 0..3 {
+                        pass[q][c] += v[c] as f64;
+                    }
+                }
+            }
+        }
+        let mut im = [0.0f64; 3];
+        for (i, p) in pass.iter().enumerate() {
+            for c in 0..3 {
+                assert!(p[c].is_finite(), "pixel {i} pass {j}: {p:?}");
+                sum[i][c] += p[c];
+                sum2[i][c] += p[c] * p[c];
+                im[c] += p[c] / n as f64;
+            }
+        }
+        for c in 0..3 {
+            isum[c] += im[c];
+            isum2[c] += im[c] * im[c];
+        }
+    }
+    let k = spp as f64;
+    let mv = |s: f64, s2: f64| {
+        let m = s / k;
+        (m, ((s2 / k - m * m) * k / (k - 1.0)).max(0.0) / k)
+    };
+    let mut mean = vec![[0.0; 3]; n];
+    let mut var = vec![[0.0; 3]; n];
+    for i in 0..n {
+        for c in 0..3 {
+            (mean[i][c], var[i][c]) = mv(sum[i][c], sum2[i][c]);
+        }
+    }
+    let mut img_mean = [0.0; 3];
+    let mut img_se = [0.0; 3];
+    for c in 0..3 {
+        let (m, v) = mv(isum[c], isum2[c]);
+        img_mean[c] = m;
+        img_se[c] = v.sqrt();
+    }
+    Img {
+        w,
+        _h: h,
+        mean,
+        var,
+        img_mean,
+        img_se,
+    }
+}
+
+fn settings(mode: RrMode, max_depth: i32) -> IntegratorSettings {
+    IntegratorSettings {
+        kind: IntegratorKind::Path,
+        max_depth,
+        roulette: Roulette {
+            mode,
+            ..Default::default()
+        },
+    }
+}
+
+fn render_bdpt<const N: usize>(
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    spp: u32,
+    seed: u64,
+    set: &IntegratorSettings,
+    opts: BdptOptions,
+) -> Img {
+    let mut c = Counters::default();
+    render(scene, w, h, spp, seed, |cam, x, y, s, splat| {
+        sample_pixel_with::<N>(scene, cam, x, y, s, set, &opts, &mut c, splat, None)
+    })
+}
+
+fn render_path<const N: usize>(
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    spp: u32,
+    seed: u64,
+    set: &IntegratorSettings,
+) -> Img {
+    let mut c = Counters::default();
+    render(scene, w, h, spp, seed, |cam, x, y, s, _| {
+        path::sample_pixel::<N>(scene, cam, x, y, s, set, &mut c)
+    })
+}
+
+/// Paths built from a camera and a light subpath; for each, the weights of all its
+/// strategies computed by `mis_weight` from subpaths re-cut at every split.
+#[test]
+fn mis_weights_of_a_path_sum_to_one() {
+    let scene = scene::load("cornell").unwrap();
+    let cam = Camera::new(scene.camera, 32, 32);
+    let set = settings(RrMode::Off, 6);
+    let rr = roulette(&set);
+    let cfg = SamplerConfig::default();
+    let mut checked = [0usize; 8];
+    for k in 0..3000u32 {
+        let mut rs = SampleStream::new(&cfg, 7, k, k);
+        let mut c = Counters::default();
+        rs.set_dimension(0);
+        let u = rs.next_2d();
+        let raster = Vec2::new(u.x * 32.0, u.y * 32.0);
+        let mut camp: Vec<Vertex<3>> = Vec::new();
+        let mut light: Vec<Vertex<3>> = Vec::new();
+        camera_subpath(&scene, &cam, raster, 5, &mut rs, &rr, &mut c, &mut camp);
+        light_subpath(&scene, 4, &mut rs, &rr, &mut c, &mut light);
+        if camp.len() < 2 {
+            continue;
+        }
+        // The full path x_0 (camera) .. x_{n-1} (emitter): camera vertices, then the
+        // light subpath reversed; or a camera subpath that ended on the emitter.
+        let t0 = 2 + (k as usize % (camp.len() - 1));
+        let mut x: Vec<Vertex<3>> = camp[..t0].to_vec();
+        if k % 3 == 0 {
+            if x[t0 - 1].light == NO_LIGHT
+                || connect(&scene, &cam, &light, &camp, 0, t0, &mut rs, &mut c).is_none()
+            {
+                continue;
+            }
+        } else {
+            if light.len() < 2 {
+                continue;
+            }
+            let s0 = 2 + (k as usize / 3 % (light.len() - 1));
+            if connect(&scene, &cam, &light, &camp, s0, t0, &mut rs, &mut c).is_none() {
+                continue;
+            }
+            x.extend(light[..s0].iter().rev().copied());
+        }
+        let n = x.len();
+        if n == 2 {
+            continue; // (0, 2) alone: weight 1
+        }
+        // Both roles of every point: camera side (A) and light side (B).
+        let as_surface = |v: &Vertex<3>| -> Vertex<3> {
+            let mut v = *v;
+            if v.kind == Kind::Light {
+                let tri = scene.lights.get(v.light).tri;
+                v.kind = Kind::Surface;
+                v.bsdf = scene.material_of(tri).bsdf;
+            }
+            v
+        };
+        let a: Vec<Vertex<3>> = (0..n)
+            .map(|i| if i == 0 { x[0] } else { as_surface(&x[i]) })
+            .collect();
+        let b: Vec<Vertex<3>> = (0..n)
+            .map(|i| {
+                if i == n - 1 {
+                    let mut v = x[n - 1];
+                    v.kind = Kind::Light;
+                    v.pdf_fwd = scene.lights.pdf_position(v.light);
+                    v
+                } else {
+                    a[i]
+                }
+            })
+            .collect();
+        // Area densities of each point generated from the camera side and the light side.
+        let mut pc = vec![1.0f32; n];
+        let mut pl = vec![0.0f32; n];
+        for i in 1..n {
+            pc[i] = a[i - 1].pdf(&cam, (i >= 2).then(|| &a[i - 2]), &a[i]);
+        }
+        pl[n - 1] = scene.lights.pdf_position(x[n - 1].light);
+        for i in (0..n - 1).rev() {
+            pl[i] = b[i + 1].pdf(&cam, (i + 2 < n).then(|| &b[i + 2]), &b[i]);
+        }
+        for heuristic in [MisHeuristic::Balance, MisHeuristic::Power] {
+            let e = if heuristic == MisHeuristic::Power {
+                2
+            } else {
+                1
+            };
+            let explicit = |tt: usize| -> f64 {
+                let mut p = 1.0f64;
+                for &q in &pc[1..tt] {
+                    p *= q as f64;
+                }
+                for &q in &pl[tt..n] {
+                    p *= q as f64;
+                }
+                p.powi(e)
+            };
+            let total: f64 = (1..=n).map(explicit).sum();
+            let mut sum = 0.0f64;
+            for tt in 1..=n {
+                let ss = n - tt;
+                let cp: Vec<Vertex<3>> = (0..tt)
+                    .map(|i| {
+                        let mut v = a[i];
+                        v.pdf_fwd = pc[i];
+                        v.pdf_rev = pl[i];
+                        v
+                    })
+                    .collect();
+                let lp: Vec<Vertex<3>> = (0..ss)
+                    .map(|j| {
+                        let i = n - 1 - j;
+                        let mut v = b[i];
+                        v.pdf_fwd = pl[i];
+                        v.pdf_rev = pc[i];
+                        v
+                    })
+                    .collect();
+                let sampled = if ss == 1 {
+                    Some(lp[0])
+                } else if tt == 1 {
+                    Some(cp[0])
+                } else {
+                    None
+                };
+                let w = mis_weight(&scene, &cam, &lp, &cp, sampled.as_ref(), ss, tt, heuristic);
+                let want = explicit(tt) / total;
+                assert!(
+                    (w as f64 - want).abs() < 1e-4,
+                    "path {k} ({n} vertices), strategy ({ss}, {tt}), {heuristic:?}: recurrence {w}, explicit {want}"
+                );
+                sum += w as f64;
+            }
+            assert!(
+                (sum - 1.0).abs() < 1e-5,
+                "path {k} {heuristic:?}: sum {sum}"
+            );
+        }
+        checked[n.min(7)] += 1;
+    }
+    // paths of 3 .. 7+ vertices were all exercised
+    assert!(checked[3] > 0, "{checked:?}");
+    for (n, &k) in checked.iter().enumerate().skip(4) {
+        assert!(k >= 20, "only {k} paths of {n} vertices: {checked:?}");
+    }
+}
+
+fn assert_furnace(img: &Img, what: &str) {
+    for c in 0..3 {
+        let (m, se) = (img.img_mean[c], img.img_se[c]);
+        assert!(se > 0.0, "{what}: zero variance");
+        assert!(
+            (m - 1.0).abs() <= 3.0 * se,
+            "{what}: channel {c} mean {m} se {se} ({:.2} se off)",
+            (m - 1.0).abs() / se
+        );
+    }
+}
+
+#[test]
+fn furnace_is_one() {
+    for name in ["furnace", "furnace-glossy"] {
+        let scene = scene::load(name).unwrap();
+        for (k, mode) in [RrMode::Classic, RrMode::Spectral].into_iter().enumerate() {
+            let set = settings(mode, -1);
+            let o = BdptOptions::default();
+            let seed = 10 + k as u64;
+            let img = render_bdpt::<3>(&scene, 8, 8, 48, seed, &set, o);
+            assert_furnace(&img, &format!("{name} rgb {mode:?}"));
+            let img = render_bdpt::<8>(&scene, 8, 8, 48, seed, &set, o);
+            assert_furnace(&img, &format!("{name} 8 bands {mode:?}"));
+            let img = render_bdpt::<16>(&scene, 8, 8, 48, seed, &set, o);
+            assert_furnace(&img, &format!("{name} 16 bands {mode:?}"));
+        }
+        // the power heuristic too
+        let o = BdptOptions {
+            heuristic: MisHeuristic::Power,
+            ..Default::default()
+        };
+        let img = render_bdpt::<3>(&scene, 8, 8, 48, 20, &settings(RrMode::Classic, -1), o);
+        assert_furnace(&img, &format!("{name} power heuristic"));
+        // a lobe selection of the roulette paper (the MIS densities stay the mixture's)
+        let mut set = settings(RrMode::Spectral, -1);
+        set.roulette.select = crate::integrator::BsdfSelect::Mis;
+        let img = render_bdpt::<8>(&scene, 8, 8, 48, 21, &set, BdptOptions::default());
+        assert_furnace(&img, &format!("{name} 8 bands, spectral, bsdf-select mis"));
+    }
+}
+
+/// z-test of two images' means over a set of pixels, per channel.
+fn region_z(a: &Img, b: &Img, x0: u32, y0: u32, x1: u32, y1: u32) -> [f64; 3] {
+    let mut z = [0.0; 3];
+    for (c, zc) in z.iter_mut().enumerate() {
+        let (mut da, mut va) = (0.0, 0.0);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let i = (y * a.w + x) as usize;
+                da += a.mean[i][c] - b.mean[i][c];
+                va += a.var[i][c] + b.var[i][c];
+            }
+        }
+        *zc = if va > 0.0 { da / va.sqrt() } else { 0.0 };
+    }
+    z
+}
+
+#[test]
+fn light_tracing_agrees_with_the_path_tracer() {
+    // Light tracing alone (t = 1, plus emitters seen directly) converges to the path
+    // tracer's image: the camera importance is normalised right and the raster mapping
+    // is the inverse of the camera rays (quadrants: a mirrored image would fail).
+    let scene = scene::load("cornell").unwrap();
+    let set = settings(RrMode::Classic, -1);
+    let lt = BdptOptions {
+        strategies: Strategies::LightTracing,
+        ..Default::default()
+    };
+    let (w, h) = (8, 8);
+    let a = render_bdpt::<3>(&scene, w, h, 512, 1, &set, lt);
+    let b = render_path::<3>(&scene, w, h, 256, 2, &set);
+    for c in 0..3 {
+        let z =
+            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
+        assert!(
+            z.abs() < 3.0,
+            "channel {c}: light tracing {} +- {}, path {} +- {}",
+            a.img_mean[c],
+            a.img_se[c],
+            b.img_mean[c],
+            b.img_se[c]
+        );
+    }
+    for (x0, y0) in [(0, 0), (w / 2, 0), (0, h / 2), (w / 2, h / 2)] {
+        let z = region_z(&a, &b, x0, y0, x0 + w / 2, y0 + h / 2);
+        assert!(
+            z.iter().all(|z| z.abs() < 4.0),
+            "quadrant ({x0}, {y0}): z {z:?}"
+        );
+    }
+}
+
+/// BDPT at `spp` against the path tracer at 16 x `spp` (a reference with its own seed: the
+/// path tracer's skewed pixel distributions at equal spp make its low tail too rare for a
+/// fair per-pixel test): per-pixel z-tests with a multiple-comparison bound, and the
+/// image mean within 3 standard errors.
+fn agree_per_pixel(name: &str, w: u32, h: u32, spp: u32) {
+    agree_per_pixel_on(&scene::load(name).unwrap(), w, h, spp);
+}
+
+fn agree_per_pixel_on(scene: &Scene, w: u32, h: u32, spp: u32) {
+    let name = &scene.info.name;
+    let set = settings(RrMode::Classic, -1);
+    let a = render_bdpt::<3>(scene, w, h, spp, 3, &set, BdptOptions::default());
+    let b = render_path::<3>(scene, w, h, 16 * spp, 4, &set);
+    let tests = (w * h * 3) as f64;
+    let (mut big, mut worst) = (0, 0.0f64);
+    for i in 0..(w * h) as usize {
+        for c in 0..3 {
+            let v = a.var[i][c] + b.var[i][c];
+            let z = if v > 0.0 {
+                (a.mean[i][c] - b.mean[i][c]) / v.sqrt()
+            } else {
+                0.0
+            };
+            worst = worst.max(z.abs());
+            if z.abs() > 3.0 {
+                big += 1;
+            }
+        }
+    }
+    // 0.27% of the tests beyond 3 sigma by chance (allow 3x that + 2); Bonferroni at 1%
+    // for the worst: 4.4 sigma for 768 tests (allow 4.8).
+    let allowed = (3.0 * 0.0027 * tests) as usize + 2;
+    assert!(
+        big <= allowed && worst < 4.8,
+        "{name}: {big} of {tests} beyond 3 se (allowed {allowed}), worst {worst}"
+    );
+    for c in 0..3 {
+        let z =
+            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
+        assert!(
+            z.abs() < 3.0,
+            "{name} channel {c}: image means {} vs {} (z {z})",
+            a.img_mean[c],
+            b.img_mean[c]
+        );
+    }
+}
+
+#[test]
+fn bdpt_agrees_with_the_path_tracer_per_pixel() {
+    agree_per_pixel("cornell", 16, 16, 128);
+    agree_per_pixel("cornell-glossy", 8, 8, 128);
+}
+
+#[test]
+fn caustic_agrees_with_the_path_tracer() {
+    // Glass with smooth shading normals, Dirac vertices on both subpaths: image means of
+    // BDPT and of the path tracer at 16x the samples (about 8x the time).
+    let scene = scene::load("caustic").unwrap();
+    let set = settings(RrMode::Classic, -1);
+    let a = render_bdpt::<3>(&scene, 8, 8, 256, 3, &set, BdptOptions::default());
+    let b = render_path::<3>(&scene, 8, 8, 16 * 256, 4, &set);
+    for c in 0..3 {
+        let z =
+            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
+        assert!(
+            z.abs() < 3.0,
+            "channel {c}: bdpt {} +- {}, path {} +- {}",
+            a.img_mean[c],
+            a.img_se[c],
+            b.img_mean[c],
+            b.img_se[c]
+        );
+        // and BDPT's error is well below the path tracer's at 1/16 of the samples
+        assert!(
+            a.img_se[c] < 0.6 * b.img_se[c],
+            "{:?} vs {:?}",
+            a.img_se,
+            b.img_se
+        );
+    }
+}
+
+#[test]
+fn unweighted_strategies_converge_to_the_same_image() {
+    // For a fixed path length every strategy alone (unweighted) estimates the same light:
+    // on cornell, paths of 3 vertices (direct light) and of 4 (one bounce), the image mean
+    // of each strategy (s, t) with s + t = k agrees with the others' (z-tests).
+    let scene = scene::load("cornell").unwrap();
+    let (w, h, spp) = (8u32, 8u32, 384u32);
+    let cam = Camera::new(scene.camera, w, h);
+    let set = settings(RrMode::Off, 3);
+    let cfg = SamplerConfig {
+        kind: SamplerKind::Random,
+        seed: 17,
+        dependent: false,
+    };
+    let npix = (w * h) as f64;
+    // per (s, t): sum and sum of squares of the passes' image means
+    let mut acc: std::collections::HashMap<(u32, u32), (f64, f64)> = Default::default();
+    for j in 0..spp {
+        let mut pass: std::collections::HashMap<(u32, u32), f64> = Default::default();
+        for y in 0..h {
+            for x in 0..w {
+                let mut s = SampleStream::new(&cfg, 0, y * w + x, j);
+                let mut c = Counters::default();
+                sample_pixel_with::<3>(
+                    &scene,
+                    &cam,
+                    x,
+                    y,
+                    &mut s,
+                    &set,
+                    &BdptOptions::default(),
+                    &mut c,
+                    &mut |_, _| {},
+                    Some(&mut |st: StrategySample| {
+                        let v = st.unweighted.iter().sum::<f32>() as f64 / 3.0;
+                        *pass.entry((st.s, st.t)).or_default() += v / npix;
+                    }),
+                );
+            }
+        }
+        for k in 3..=4u32 {
+            for t in 1..=k {
+                let e = acc.entry((k - t, t)).or_default();
+                let v = pass.get(&(k - t, t)).copied().unwrap_or(0.0);
+                e.0 += v;
+                e.1 += v * v;
+            }
+        }
+    }
+    let n = spp as f64;
+    let stat = |st: (u32, u32)| {
+        let (s1, s2) = acc[&st];
+        let m = s1 / n;
+        (m, ((s2 / n - m * m) / (n - 1.0)).max(0.0).sqrt())
+    };
+    for k in 3..=4u32 {
+        let strategies: Vec<(u32, u32)> = (1..=k)
+            .map(|t| (k - t, t))
+            .filter(|&(s, t)| !(s == 1 && t == 1))
+            .collect();
+        for &a in &strategies {
+            eprintln!("length {k} {a:?}: {:?}", stat(a));
+        }
+        for (i, &a) in strategies.iter().enumerate() {
+            for &b in &strategies[i + 1..] {
+                let ((ma, sa), (mb, sb)) = (stat(a), stat(b));
+                assert!(ma > 0.0 && mb > 0.0, "{a:?} {ma} {b:?} {mb}");
+                let z = (ma - mb) / (sa * sa + sb * sb).sqrt();
+                assert!(
+                    z.abs() < 3.5,
+                    "length {k}: {a:?} {ma} +- {sa} vs {b:?} {mb} +- {sb} (z {z:.2})"
+                );
+            }
+        }
+    }
+}
+
+/// A white room with a coarse (48-triangle) diffuse sphere whose interpolated normals
+/// differ from the facets' by up to 30 degrees: the adjoint BSDF's shading-normal
+/// correction matters on every light-subpath vertex on it.
+fn smooth_sphere_room() -> Scene {
+    use crate::scene::builtin::{inward_box, push_quad, push_sphere};
+    use crate::scene::{CameraDesc, MaterialDesc, SceneDesc};
+    let mut d = SceneDesc {
+        name: "smooth-sphere".into(),
+        ..Default::default()
+    };
+    let mut white = MaterialDesc::named("white");
+    white.kd = [0.6; 3];
+    let mut light = MaterialDesc::named("light");
+    light.kd = [0.0; 3];
+    light.ke = [4.0; 3];
+    let mut ball = MaterialDesc::named("ball");
+    ball.kd = [0.8, 0.7, 0.5];
+    d.materials = vec![white, light, ball];
+    inward_box(&mut d, [0; 6], 1);
+    let (a, y) = (0.3, 0.99);
+    push_quad(
+        &mut d,
+        [
+            Vec3::new(-a, y, -a),
+            Vec3::new(a, y, -a),
+            Vec3::new(a, y, a),
+            Vec3::new(-a, y, a),
+        ],
+        1,
+    );
+    push_sphere(&mut d, Vec3::new(0.1, -0.45, -0.3), 0.5, 5, 8, 2);
+    d.camera = Some(CameraDesc {
+        origin: [0.0, 0.1, 0.95],
+        target: [0.1, -0.45, -0.3],
+        up: [0.0, 1.0, 0.0],
+        fov: 35.0,
+    });
+    Scene::build(d, 0.0).unwrap()
+}
+
+#[test]
+fn shading_normals_adjoint() {
+    // Light tracing alone (every contribution through the adjoint BSDF) and BDPT agree
+    // with the path tracer on a sphere with strongly interpolated normals.
+    let scene = smooth_sphere_room();
+    let set = settings(RrMode::Classic, -1);
+    let lt = BdptOptions {
+        strategies: Strategies::LightTracing,
+        ..Default::default()
+    };
+    let (w, h) = (8, 8);
+    let a = render_bdpt::<3>(&scene, w, h, 2048, 1, &set, lt);
+    let b = render_path::<3>(&scene, w, h, 8192, 2, &set);
+    for c in 0..3 {
+        let z =
+            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
+        eprintln!("light tracing vs path, image mean z {z}");
+        assert!(z.abs() < 3.0, "channel {c}: z {z}");
+    }
+    let mut zs = Vec::new();
+    for (x0, y0) in [(0, 0), (w / 2, 0), (0, h / 2), (w / 2, h / 2)] {
+        let z = region_z(&a, &b, x0, y0, x0 + w / 2, y0 + h / 2);
+        zs.push(z);
+        assert!(
+            z.iter().all(|z| z.abs() < 4.0),
+            "quadrant ({x0}, {y0}): z {z:?}"
+        );
+    }
+    eprintln!("light tracing vs path, quadrant z: {zs:?}");
+    agree_per_pixel_on(&scene, 8, 8, 256);
+}
+
+#[test]
+fn max_depth_limits_the_whole_path() {
+    // max_depth 2 = direct light only: BDPT and the path tracer agree on it, and
+    // max_depth 1 shows only the emitter.
+    let scene = scene::load("cornell").unwrap();
+    let set = settings(RrMode::Classic, 2);
+    let a = render_bdpt::<3>(&scene, 8, 8, 128, 5, &set, BdptOptions::default());
+    let b = render_path::<3>(&scene, 8, 8, 128, 6, &set);
+    for c in 0..3 {
+        let z =
+            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
+        assert!(
+            z.abs() < 3.0,
+            "depth 2, channel {c}: {} vs {}",
+            a.img_mean[c],
+            b.img_mean[c]
+        );
+    }
+    let set = settings(RrMode::Classic, 1);
+    let a = render_bdpt::<3>(&scene, 8, 8, 16, 5, &set, BdptOptions::default());
+    let b = render_path::<3>(&scene, 8, 8, 16, 5, &set);
+    for i in 0..64 {
+        for c in 0..3 {
+            assert!(
+                (a.mean[i][c] - b.mean[i][c]).abs() < 1e-4,
+                "depth 1 pixel {i}"
+            );
+        }
+    }
+}
+
+#[test]
+fn strategies_add_up_to_the_sample() {
+    // The debug layers' weighted contributions add up to the returned value and splats.
+    let scene = scene::load("cornell").unwrap();
+    let cam = Camera::new(scene.camera, 8, 8);
+    let set = settings(RrMode::Classic, -1);
+    let cfg = SamplerConfig::default();
+    let mut seen = std::collections::HashSet::new();
+    for k in 0..200u32 {
+        let mut s = SampleStream::new(&cfg, 0, k % 64, k);
+        let mut c = Counters::default();
+        let mut splat_sum = [0.0f32; 3];
+        let mut strat_sum = [0.0f32; 3];
+        let v = sample_pixel_with::<3>(
+            &scene,
+            &cam,
+            k % 8,
+            (k / 8) % 8,
+            &mut s,
+            &set,
+            &BdptOptions::default(),
+            &mut c,
+            &mut |_, rgb| (0..3).for_each(|i| splat_sum[i] += rgb[i]),
+            Some(&mut |st: StrategySample| {
+                seen.insert((st.s, st.t));
+                (0..3).for_each(|i| strat_sum[i] += st.weighted[i]);
+            }),
+        );
+        for i in 0..3 {
+            let want = v[i] + splat_sum[i];
+            assert!((strat_sum[i] - want).abs() <= 1e-4 * want.abs().max(1.0));
+        }
+    }
+    for st in [(0, 2), (1, 2), (2, 1), (1, 3), (2, 2), (3, 1)] {
+        assert!(seen.contains(&st), "strategy {st:?} never contributed");
+    }
+}
+
+#[test]
+fn caustic_light_leaves_only_through_the_sphere() {
+    // Emission rays of the `caustic` light first hit the glass sphere or the black lamp
+    // housing, never the room directly (bar a leak below 1%).
+    let scene = scene::load("caustic").unwrap();
+    assert!(scene.info.triangles < 5000, "{}", scene.info.triangles);
+    assert_eq!(scene.info.skipped_degenerate, 0);
+    let mut rng = crate::sampling::SeqRng::new(3);
+    let (mut glass, mut room) = (0, 0);
+    for _ in 0..20_000 {
+        let ls = scene
+            .lights
+            .sample_position(rng.next_f32(), rng.next_2d())
+            .unwrap();
+        let (d, _) = scene.lights.sample_direction(ls.light, rng.next_2d());
+        let ray = Ray::new(offset_origin(ls.p, ls.n, d), d);
+        let Some(hit) = intersect(&scene, &ray, f32::INFINITY) else {
+            continue;
+        };
+        match scene.material_of(hit.prim).name.as_str() {
+            "glass" => glass += 1,
+            "housing" => {}
+            _ => room += 1,
+        }
+    }
+    eprintln!("glass {glass} room {room}");
+    assert!(glass > 1000, "glass {glass} room {room}");
+    assert!(
+        (room as f64) < 0.01 * glass as f64,
+        "glass {glass} room {room}"
+    );
+}
+
+/// Paths per second of BDPT and the path tracer on cornell in the same loop
+/// (`cargo test --release --lib bdpt_speed -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn bdpt_speed() {
+    let scene = scene::load("cornell").unwrap();
+    let set = settings(RrMode::Classic, -1);
+    let (w, h, spp) = (64, 64, 32);
+    for round in 0..2 {
+        let t0 = std::time::Instant::now();
+        let mut c = Counters::default();
+        render(&scene, w, h, spp, 1, |cam, x, y, s, _| {
+            path::sample_pixel::<3>(&scene, cam, x, y, s, &set, &mut c)
+        });
+        let tp = t0.elapsed().as_secs_f64();
+        let cp = c;
+        let t0 = std::time::Instant::now();
+        let mut c = Counters::default();
+        let o = BdptOptions::default();
+        render(&scene, w, h, spp, 1, |cam, x, y, s, splat| {
+            sample_pixel_with::<3>(&scene, cam, x, y, s, &set, &o, &mut c, splat, None)
+        });
+        let tb = t0.elapsed().as_secs_f64();
+        println!(
+            "round {round}: path {:.0} paths/s ({:.2} rays/path), bdpt {:.0} paths/s ({:.2} rays/path): bdpt {:.2}x slower per sample",
+            cp.paths as f64 / tp,
+            cp.rays as f64 / cp.paths as f64,
+            c.paths as f64 / tb,
+            c.rays as f64 / c.paths as f64,
+            tb / tp
+        );
+    }
+}
+
+/// Diagnostic: BDPT and the path tracer at `KALOS_SPP` against a path-traced reference at
+/// 16x that (`cargo test --release --lib bdpt_vs_reference -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn bdpt_vs_reference() {
+    let scene = scene::load("cornell").unwrap();
+    let set = settings(RrMode::Classic, -1);
+    let spp: u32 = std::env::var("KALOS_SPP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(256);
+    let (w, h) = (16, 16);
+    let r = render_path::<3>(&scene, w, h, spp * 16, 99, &set);
+    let a = render_bdpt::<3>(&scene, w, h, spp, 3, &set, BdptOptions::default());
+    let b = render_path::<3>(&scene, w, h, spp, 4, &set);
+    for (name, x) in [("bdpt", &a), ("path", &b)] {
+        let (mut hi, mut lo, mut zs) = (0, 0, 0.0f64);
+        for i in 0..(w * h) as usize {
+            for c in 0..3 {
+                let v = x.var[i][c] + r.var[i][c];
+                let z = if v > 0.0 {
+                    (x.mean[i][c] - r.mean[i][c]) / v.sqrt()
+                } else {
+                    0.0
+                };
+                zs += z;
+                if z > 3.0 {
+                    hi += 1;
+                }
+                if z < -3.0 {
+                    lo += 1;
+                }
+            }
+        }
+        println!(
+            "{name}: {hi} above 3 se, {lo} below, mean z {:.3}",
+            zs / 768.0
+        );
+    }
+}
+
+/// Diagnostic: image means on `caustic` (`-- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn caustic_means() {
+    let scene = scene::load("caustic").unwrap();
+    let set = settings(RrMode::Classic, -1);
+    let spp: u32 = std::env::var("KALOS_SPP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(256);
+    let (w, h) = (8, 8);
+    let t0 = std::time::Instant::now();
+    let a = render_bdpt::<3>(&scene, w, h, spp, 3, &set, BdptOptions::default());
+    let ta = t0.elapsed().as_secs_f64();
+    let t0 = std::time::Instant::now();
+    let b = render_path::<3>(&scene, w, h, 16 * spp, 4, &set);
+    let tb = t0.elapsed().as_secs_f64();
+    println!("bdpt {:?} +- {:?} in {ta:.2}s", a.img_mean, a.img_se);
+    println!("path {:?} +- {:?} in {tb:.2}s", b.img_mean, b.img_se);
+}
+
+/// Diagnostic: light tracing and BDPT against the path tracer on the smooth sphere over
+/// several seeds (`-- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn shading_normals_seeds() {
+    let scene = smooth_sphere_room();
+    let set = settings(RrMode::Classic, -1);
+    let lt = BdptOptions {
+        strategies: Strategies::LightTracing,
+        ..Default::default()
+    };
+    let b = render_path::<3>(&scene, 8, 8, 32768, 2, &set);
+    for seed in 10..16 {
+        let a = render_bdpt::<3>(&scene, 8, 8, 2048, seed, &set, lt);
+        let m = render_bdpt::<3>(&scene, 8, 8, 512, seed, &set, BdptOptions::default());
+        let z = |a: &Img| {
+            (a.img_mean[0] - b.img_mean[0]) / (a.img_se[0].powi(2) + b.img_se[0].powi(2)).sqrt()
+        };
+        println!("seed {seed}: light tracing z {:.2}, bdpt z {:.2} (path se {:.2e}, lt se {:.2e}, bdpt se {:.2e})", z(&a), z(&m), b.img_se[0], a.img_se[0], m.img_se[0]);
+    }
+}
+
+/// Diagnostic: efficiency 1 / (mean per-pixel variance x time) of BDPT against the path
+/// tracer (variance from the passes; single-threaded, same loop), and PNGs of both in /tmp
+/// (`cargo test --release --lib bdpt_efficiency -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn bdpt_efficiency() {
+    let set = settings(RrMode::Classic, -1);
+    for (name, w, spp_b, spp_p) in [("cornell", 32, 64, 256), ("caustic", 32, 64, 256)] {
+        let scene = scene::load(name).unwrap();
+        let t0 = std::time::Instant::now();
+        let a = render_bdpt::<3>(&scene, w, w, spp_b, 1, &set, BdptOptions::default());
+        let ta = t0.elapsed().as_secs_f64();
+        let t0 = std::time::Instant::now();
+        let b = render_path::<3>(&scene, w, w, spp_p, 2, &set);
+        let tb = t0.elapsed().as_secs_f64();
+        let mv = |x: &Img| {
+            x.var
+                .iter()
+                .map(|v| (v[0] + v[1] + v[2]) / 3.0)
+                .sum::<f64>()
+                / x.var.len() as f64
+        };
+        let (va, vb) = (mv(&a), mv(&b));
+        println!(
+            "{name} {w}x{w}: bdpt {spp_b} spp {ta:.2}s var {va:.3e}; path {spp_p} spp {tb:.2}s var {vb:.3e}; efficiency bdpt/path {:.2}",
+            (vb * tb) / (va * ta)
+        );
+        for (tag, x, ww) in [("bdpt", &a, w), ("path", &b, w)] {
+            let data = x
+                .mean
+                .iter()
+                .map(|m| [m[0] as f32, m[1] as f32, m[2] as f32])
+                .collect();
+            let img = crate::image_io::RgbImage::new(ww, ww, data);
+            crate::image_io::write_image(
+                std::path::Path::new(&format!("/tmp/{name}-{tag}.png")),
+                &img,
+                0.0,
+                &[],
+            )
+            .unwrap();
+        }
+    }
+    let scene = scene::load("caustic").unwrap();
+    let a = render_bdpt::<3>(&scene, 128, 128, 16, 1, &set, BdptOptions::default());
+    let data = a
+        .mean
+        .iter()
+        .map(|m| [m[0] as f32, m[1] as f32, m[2] as f32])
+        .collect();
+    let img = crate::image_io::RgbImage::new(128, 128, data);
+    crate::image_io::write_image(
+        std::path::Path::new("/tmp/caustic-bdpt-128.png"),
+        &img,
+        0.0,
+        &[],
+    )
+    .unwrap();
+    let b = render_path::<3>(&scene, 128, 128, 64, 2, &set);
+    let data = b
+        .mean
+        .iter()
+        .map(|m| [m[0] as f32, m[1] as f32, m[2] as f32])
+        .collect();
+    let img = crate::image_io::RgbImage::new(128, 128, data);
+    crate::image_io::write_image(
+        std::path::Path::new("/tmp/caustic-path-128.png"),
+        &img,
+        0.0,
+        &[],
+    )
+    .unwrap();
+}
