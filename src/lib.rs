@@ -16,6 +16,7 @@ pub mod material;
 pub mod math;
 pub mod metrics;
 pub mod pipeline;
+pub mod radiosity;
 pub mod report;
 pub mod sampling;
 pub mod scene;
