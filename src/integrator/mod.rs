@@ -1,6 +1,7 @@
 //! Estimators of the radiance along camera rays. They see an immutable scene and a
 //! random stream, never the CLI.
 
+pub mod gather;
 pub mod path;
 pub mod rr;
 
