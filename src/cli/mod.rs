@@ -2,6 +2,7 @@
 //! by the library. Every error is one line naming the file, line or option at fault.
 
 pub mod experiment;
+pub mod radiosity;
 pub mod render;
 
 use clap::{Parser, Subcommand};
@@ -42,6 +43,9 @@ pub enum Command {
         #[arg(short, long)]
         quiet: bool,
     },
+    /// Solve the scene's radiosity (the preprocess of Rushmeier and Ward's path tracer)
+    /// and write the meshed solution as a vertex-coloured PLY.
+    Radiosity(radiosity::RadiosityArgs),
     /// Print triangles, materials, emitters, bounds and load/BVH times of a scene.
     Info {
         /// Built-in scene name, .obj or .toml file.
@@ -111,6 +115,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Experiment { file, out, quiet } => experiment::run(&file, out, quiet),
+        Command::Radiosity(args) => radiosity::run(args),
         Command::Info { scene, json } => {
             let s = crate::scene::load(&scene)?;
             for w in &s.warnings {

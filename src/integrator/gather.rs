@@ -360,8 +360,7 @@ mod tests {
 
     fn furnace_solution(scene: &Scene) -> Solution {
         let set = RadiositySettings {
-            max_area: Some(2.0 / 16.0),
-            tolerance: 1e-4,
+            max_area: Some(2.0 / 64.0),
             ..Default::default()
         };
         Solution::compute(scene, &set, 3, None).unwrap()

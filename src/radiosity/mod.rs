@@ -120,6 +120,8 @@ pub struct Solution {
     pub vertex_b: Vec<f32>,
     /// B per element, side and band (the solver's values).
     pub element_b: Vec<f32>,
+    /// Unshot radiosity dB per element, side and band when the solver stopped.
+    pub element_unshot: Vec<f32>,
     /// Emitted radiosity E = pi L_e (front side) per scene triangle and band (empty for
     /// triangles that are not meshed).
     pub tri_e: Vec<Vec<f32>>,
@@ -281,6 +283,12 @@ impl Solution {
             if residual <= set.tolerance || sh.shots >= max_shots {
                 break;
             }
+            if !residual.is_finite() || residual > 100.0 {
+                return Err(format!(
+                    "scene {name}: the radiosity iteration diverged after {} shots (unshot power {residual:.3e} x the emitted): reflectances above 1?",
+                    sh.shots
+                ));
+            }
             sh.shoot(p);
             if let Some(pb) = progress {
                 if sh.shots % 16 == 0 {
@@ -321,6 +329,7 @@ impl Solution {
             })
             .collect();
         let element_b: Vec<f32> = sh.b.iter().map(|&v| v as f32).collect();
+        let element_unshot: Vec<f32> = sh.db.iter().map(|&v| v as f32).collect();
         let stats = RadiosityStats {
             elements: ne as u64,
             vertices: nvtx as u64,
@@ -341,6 +350,7 @@ impl Solution {
             mesh,
             vertex_b,
             element_b,
+            element_unshot,
             tri_e,
             stats,
         })
