@@ -291,7 +291,7 @@ impl Solution {
             }
             sh.shoot(p);
             if let Some(pb) = progress {
-                if sh.shots % 16 == 0 {
+                if sh.shots.is_multiple_of(16) {
                     let f = (residual.ln() / set.tolerance.ln()).clamp(0.0, 1.0);
                     pb.set_position((f * 1000.0) as u64);
                 }

@@ -288,7 +288,7 @@ impl Shooter<'_> {
         let nb = self.bands;
         let si = p / 2;
         let src = self.elems[si];
-        let src_n = if p % 2 == 0 { src.n } else { -src.n };
+        let src_n = if p.is_multiple_of(2) { src.n } else { -src.n };
         let bvh = self.bvh;
         let pat = &self.patterns;
         let rho = &self.rho;
