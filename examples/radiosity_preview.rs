@@ -1,9 +1,11 @@
 //! The radiosity preview (emitters + (B - E)/pi at the first non-specular hit, mirrors and
 //! glass followed) of a scene at one max element area, and its bias against a reference:
 //!
-//!   cargo run --release --example radiosity_preview -- cornell 0.05 out.exr [ref.exr]
+//!   cargo run --release --example radiosity_preview -- cornell 0.05 out.exr [ref.exr [SPP]]
 //!
 //! Issue 9's table of the preview's bias against plain path tracing at three mesh sizes.
+//! With SPP, the gather path tracer (`integrator::gather`, gather depth 1) at SPP samples
+//! per pixel instead of the preview.
 
 use kalos::image_io::{read_image, write_image, RgbImage};
 use kalos::integrator::{camera_ray, gather, Counters};
@@ -28,7 +30,9 @@ fn main() -> Result<(), String> {
     let (w, h) = scene.defaults.res.unwrap_or((256, 256));
     let cam = Camera::new(scene.camera, w, h);
     let cfg = SamplerConfig::default();
-    let spp = 16;
+    let gather_spp: Option<u32> = a.get(5).and_then(|v| v.parse().ok());
+    let spp = gather_spp.unwrap_or(16);
+    let iset = kalos::integrator::IntegratorSettings::default();
     let data: Vec<[f32; 3]> = (0..w * h)
         .into_par_iter()
         .map(|p| {
@@ -38,7 +42,11 @@ fn main() -> Result<(), String> {
             for i in 0..spp {
                 let mut s = SampleStream::new(&cfg, 0, p, i);
                 let ray = camera_ray(&cam, x, y, &mut s);
-                let l = gather::preview::<3>(&scene, &sol, ray, &mut s, 64, &mut c).to_rgb();
+                let l = match gather_spp {
+                    None => gather::preview::<3>(&scene, &sol, ray, &mut s, 64, &mut c),
+                    Some(_) => gather::radiance::<3>(&scene, &sol, ray, &mut s, &iset, 1, &mut c),
+                }
+                .to_rgb();
                 for k in 0..3 {
                     acc[k] += l[k] / spp as f32;
                 }
