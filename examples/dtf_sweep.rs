@@ -47,7 +47,13 @@ fn main() {
         },
         integrator: IntegratorSettings::default(),
     };
-    let integ = kalos::integrator::Integrator::prepare(&scene, set.integrator).unwrap();
+    let integ = kalos::integrator::Integrator::prepare(
+        &scene,
+        set.integrator,
+        set.spectral.bands(),
+        &Silent,
+    )
+    .unwrap();
     let plain = render(&scene, &integ, &set, Budget::Spp(spp), 0, &Silent).unwrap();
     let img = |f: &kalos::film::Film| RgbImage::new(f.width, f.height, f.mean_rgb());
     let base = report("plain", &img(&plain.film), &reference, None);

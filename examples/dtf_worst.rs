@@ -22,7 +22,13 @@ fn main() {
         },
         integrator: IntegratorSettings::default(),
     };
-    let integ = kalos::integrator::Integrator::prepare(&scene, set.integrator).unwrap();
+    let integ = kalos::integrator::Integrator::prepare(
+        &scene,
+        set.integrator,
+        set.spectral.bands(),
+        &Silent,
+    )
+    .unwrap();
     let p = DtfParams {
         n: 32,
         eps_r: eps,

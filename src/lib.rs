@@ -21,6 +21,8 @@ pub mod math;
 pub mod metrics;
 pub mod options;
 pub mod pipeline;
+pub mod progress;
+pub mod radiosity;
 pub mod render;
 pub mod report;
 pub mod sampling;

@@ -10,9 +10,12 @@
 use crate::film::Film;
 use crate::filter::dtf::DtfParams;
 use crate::image_io::RgbImage;
-use crate::integrator::{Counters, Integrator, IntegratorKind, IntegratorSettings, Roulette};
+use crate::integrator::{
+    Counters, Gather, Integrator, IntegratorKind, IntegratorSettings, MisHeuristic, Roulette,
+};
 use crate::options::{name, parse_depth, parse_res, parse_seconds, parse_spp, parse_threads};
 use crate::pipeline::{self, Budget, DtfBudget, DtfRun, Progress, RenderSettings};
+use crate::radiosity::RadiositySettings;
 use crate::sampling::{SamplerConfig, SamplerKind};
 use crate::scene::{CameraDesc, Scene};
 use crate::spectrum::SpectralMode;
@@ -65,6 +68,18 @@ pub struct RenderJob {
     /// Estimator.
     #[arg(long, value_enum, default_value_t = IntegratorKind::Path)]
     pub integrator: IntegratorKind,
+    /// BDPT: weighting of the strategies: balance (Veach's) or power (exponent 2).
+    #[arg(long, value_enum, default_value_t = MisHeuristic::Balance)]
+    pub bdpt_mis: MisHeuristic,
+    /// The path tracer's diffuse indirect light: off (traced) or radiosity (Rushmeier and
+    /// Ward: looked up in a radiosity solution computed before the render).
+    #[arg(long, value_enum, default_value_t = Gather::Off)]
+    pub gather: Gather,
+    /// Diffuse reflections before the gather looks up (1: the paper's first diffuse bounce).
+    #[arg(long, default_value_t = 1)]
+    pub gather_depth: u32,
+    #[command(flatten)]
+    pub radiosity: RadiositySettings,
     /// Mitsuba's max_depth: 1 = emitters seen directly, 2 = direct light, -1 = unlimited
     /// (default: the scene file's, else -1).
     #[arg(long, allow_hyphen_values = true, value_parser = parse_depth)]
@@ -136,6 +151,10 @@ impl RenderJob {
                 kind: self.integrator,
                 max_depth: self.max_depth.or(scene.defaults.max_depth).unwrap_or(-1),
                 roulette: self.roulette,
+                gather: self.gather,
+                gather_depth: self.gather_depth,
+                radiosity: self.radiosity,
+                mis: self.bdpt_mis,
             },
         }
     }
@@ -273,7 +292,8 @@ pub fn render_scene(
     let (pool, thread_warning) = thread_pool(job.threads)?;
     let mut warnings: Vec<String> = thread_warning.into_iter().collect();
     let t_prep = std::time::Instant::now();
-    let integrator = pool.install(|| Integrator::prepare(scene, set.integrator))?;
+    let integrator = pool
+        .install(|| Integrator::prepare(scene, set.integrator, set.spectral.bands(), progress))?;
     let prepare_seconds = t_prep.elapsed().as_secs_f64();
 
     let (film, image, counters, seconds, spp, interrupted, dtf_stats, dtf_run): (

@@ -17,7 +17,7 @@ fn dtf_on_the_furnace_is_one() {
     };
     let run = render_dtf(
         &scene,
-        &Integrator::prepare(&scene, set.integrator).unwrap(),
+        &Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap(),
         &set,
         &params,
         DtfBudget::Spp(400.0),
@@ -53,7 +53,7 @@ fn budget_mode_spends_the_budget() {
     };
     let run = render_dtf(
         &scene,
-        &Integrator::prepare(&scene, set.integrator).unwrap(),
+        &Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap(),
         &set,
         &params,
         DtfBudget::Spp(40.0),
@@ -93,7 +93,7 @@ fn dtf_error_keeps_falling_with_the_budget() {
     for budget in [32.0, 128.0, 512.0] {
         let run = render_dtf(
             &scene,
-            &Integrator::prepare(&scene, set.integrator).unwrap(),
+            &Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap(),
             &set,
             &params,
             DtfBudget::Spp(budget),
@@ -125,7 +125,8 @@ fn per_pixel_ray_counts_add_up_to_the_render_counters() {
     let set = settings(&scene, 16, 16);
     let mut film = Film::new(16, 16).unwrap();
     let mut rays = vec![0u64; 256];
-    let integrator = Integrator::prepare(&scene, set.integrator).unwrap();
+    let integrator =
+        Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap();
     let pass = Pass {
         scene: &scene,
         integrator: &integrator,

@@ -3,6 +3,7 @@
 
 pub mod experiment;
 pub mod progress;
+pub mod radiosity;
 pub mod render;
 
 use clap::{Parser, Subcommand};
@@ -55,6 +56,9 @@ pub enum Command {
         #[arg(long)]
         aovs: bool,
     },
+    /// Solve the scene's radiosity (the preprocess of Rushmeier and Ward's path tracer)
+    /// and write the meshed solution as a vertex-coloured PLY.
+    Radiosity(radiosity::RadiosityArgs),
     /// Print triangles, materials, emitters, bounds and load/BVH times of a scene.
     Info {
         /// Built-in scene name, .obj or .toml file.
@@ -132,6 +136,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             output,
             aovs,
         } => merge(&parts, &output, aovs),
+        Command::Radiosity(args) => radiosity::run(args),
         Command::Info { scene, json } => {
             let s = crate::scene::load(&scene)?;
             for w in &s.warnings {

@@ -35,7 +35,8 @@ pub fn interrupted() -> bool {
 pub struct CliProgress {
     bar: Option<ProgressBar>,
     quiet: bool,
-    t0: Instant,
+    /// The stage's start and unit.
+    stage: Mutex<(Instant, String)>,
     total: AtomicU64,
     done: AtomicU64,
     /// Log mode: the share (in 1/20) and time of the last line printed.
@@ -58,7 +59,7 @@ impl CliProgress {
         CliProgress {
             bar,
             quiet,
-            t0: Instant::now(),
+            stage: Mutex::new((Instant::now(), "samples".into())),
             total: AtomicU64::new(0),
             done: AtomicU64::new(0),
             last: Mutex::new((0, 0.0)),
@@ -88,6 +89,16 @@ pub fn rate(per_second: f64, unit: &str) -> String {
 }
 
 impl Progress for CliProgress {
+    fn begin(&self, unit: &str, total: u64) {
+        *self.stage.lock().unwrap_or_else(|e| e.into_inner()) = (Instant::now(), unit.to_string());
+        self.done.store(0, Ordering::Relaxed);
+        *self.last.lock().unwrap_or_else(|e| e.into_inner()) = (0, 0.0);
+        if let Some(b) = &self.bar {
+            b.reset();
+        }
+        self.set_total(total);
+    }
+
     fn set_total(&self, samples: u64) {
         self.total.store(samples, Ordering::Relaxed);
         if let Some(b) = &self.bar {
@@ -97,10 +108,11 @@ impl Progress for CliProgress {
 
     fn advance(&self, samples: u64) {
         let done = self.done.fetch_add(samples, Ordering::Relaxed) + samples;
-        let el = self.t0.elapsed().as_secs_f64();
+        let (t0, unit) = self.stage.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let el = t0.elapsed().as_secs_f64();
         if let Some(b) = &self.bar {
             b.set_position(done);
-            b.set_message(rate(done as f64 / el.max(1e-9), "samples"));
+            b.set_message(rate(done as f64 / el.max(1e-9), &unit));
             return;
         }
         if self.quiet {
@@ -115,9 +127,9 @@ impl Progress for CliProgress {
             let r = done as f64 / el.max(1e-9);
             let left = total.saturating_sub(done) as f64 / r.max(1e-9);
             eprintln!(
-                "kalos: {:>3}% {done}/{total} samples, {}, {:.0} s elapsed, about {:.0} s left",
+                "kalos: {:>3}% {done}/{total} {unit}, {}, {:.0} s elapsed, about {:.0} s left",
                 (done * 100 / total).min(100),
-                rate(r, "samples"),
+                rate(r, &unit),
                 el,
                 left
             );

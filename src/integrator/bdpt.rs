@@ -38,7 +38,7 @@
 //! is a pure function of the inputs: the same on any number of threads.
 
 use super::rr::{RrMode, Step};
-use super::{intersect, Counters, IntegratorSettings};
+use super::{Counters, IntegratorSettings};
 use crate::material::dielectric::fresnel_dielectric;
 use crate::material::Bsdf;
 use crate::math::{offset_origin, Frame, Ray, Vec2, Vec3};
@@ -66,9 +66,21 @@ pub mod dims {
     }
 }
 
-/// How the strategies of a path length are weighed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// How the strategies of a path length are weighed (`--bdpt-mis`).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
 pub enum MisHeuristic {
+    /// Veach's balance heuristic.
     #[default]
     Balance,
     /// Exponent 2.
@@ -307,7 +319,7 @@ fn random_walk<const N: usize>(
     };
     while path.len() < max_len {
         c.rays += 1;
-        let Some(hit) = intersect(scene, &ray, f32::INFINITY) else {
+        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
             break;
         };
         let mat = scene.material_of(hit.prim);

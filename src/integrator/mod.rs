@@ -9,6 +9,7 @@
 //! number of splats to other pixels through a `SplatSink`.
 
 pub mod bdpt;
+pub mod gather;
 pub mod path;
 pub mod rr;
 
@@ -16,7 +17,12 @@ use crate::math::{Ray, Vec2};
 use crate::sampling::SampleStream;
 use crate::scene::{Camera, Scene};
 
+pub use bdpt::MisHeuristic;
+pub use gather::Gather;
 pub use rr::{BsdfSelect, RadianceEstimate, Roulette, RrMode, RrWeight};
+
+use crate::radiosity::{RadiositySettings, Solution};
+use std::sync::Arc;
 
 /// Paths deeper than this end regardless (a guard for unlimited depth without roulette
 /// in closed glass or white rooms; the throughput left there is below f32 precision).
@@ -36,9 +42,15 @@ pub const HARD_MAX_DEPTH: u32 = 1024;
 )]
 #[serde(rename_all = "lowercase")]
 pub enum IntegratorKind {
-    /// Unidirectional path tracing, next-event estimation + MIS.
+    /// Unidirectional path tracing, next-event estimation + MIS (with `--gather
+    /// radiosity`: Rushmeier and Ward's path tracer reading a radiosity solution).
     #[default]
     Path,
+    /// Bidirectional path tracing: every (s, t) strategy, MIS, light-tracing splats.
+    Bdpt,
+    /// The radiosity solution seen directly (a preview): emitters plus B / pi at the first
+    /// non-specular hit, mirrors and glass followed.
+    Radiosity,
     /// Test only: every sample returns 0 and splats (x, y, 1) into the pixel to its right
     /// (wrapping), so the image is known exactly.
     #[cfg(test)]
@@ -47,13 +59,21 @@ pub enum IntegratorKind {
     SplatTest,
 }
 
-/// Settings of an estimator.
+/// Settings of an estimator (filled from `RenderJob`, where the options are named).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IntegratorSettings {
     pub kind: IntegratorKind,
     /// Mitsuba's max_depth: 1 = emitters seen directly, 2 = direct light, -1 = unlimited.
     pub max_depth: i32,
     pub roulette: Roulette,
+    /// The path tracer's diffuse indirect light: traced, or from a radiosity solution.
+    pub gather: Gather,
+    /// Diffuse reflections traced before the gather looks up (1: the paper's first bounce).
+    pub gather_depth: u32,
+    /// The radiosity preprocess (for `--gather radiosity` and `--integrator radiosity`).
+    pub radiosity: RadiositySettings,
+    /// BDPT's weighting of the strategies.
+    pub mis: MisHeuristic,
 }
 
 impl Default for IntegratorSettings {
@@ -62,6 +82,10 @@ impl Default for IntegratorSettings {
             kind: IntegratorKind::Path,
             max_depth: -1,
             roulette: Roulette::default(),
+            gather: Gather::Off,
+            gather_depth: 1,
+            radiosity: RadiositySettings::default(),
+            mis: MisHeuristic::Balance,
         }
     }
 }
@@ -141,28 +165,74 @@ impl SplatSink {
 }
 
 /// An estimator prepared for one scene and render.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct Integrator {
     pub set: IntegratorSettings,
     /// The estimate roulette's L~ (None unless the roulette uses it).
     pub estimate: Option<RadianceEstimate>,
+    /// The radiosity solution (None unless the gather or the preview reads it).
+    pub radiosity: Option<Arc<Solution>>,
+    bdpt: bdpt::BdptOptions,
 }
 
 impl Integrator {
-    /// Each estimator's own precomputation for this scene.
-    pub fn prepare(scene: &Scene, set: IntegratorSettings) -> Result<Integrator, String> {
+    /// Each estimator's own precomputation for this scene: the L~ photon walk when the
+    /// roulette uses it, the radiosity solution (on `bands` spectral bands) when the gather
+    /// or the preview reads it.
+    pub fn prepare(
+        scene: &Scene,
+        set: IntegratorSettings,
+        bands: usize,
+        progress: &dyn crate::progress::Progress,
+    ) -> Result<Integrator, String> {
+        if set.gather == Gather::Radiosity && set.kind != IntegratorKind::Path {
+            return Err(format!(
+                "--gather radiosity: the gather belongs to the path tracer, not to --integrator {}",
+                crate::options::name(&set.kind)
+            ));
+        }
+        if set.gather == Gather::Radiosity && set.roulette.select == BsdfSelect::Decompose {
+            return Err(
+                "--gather radiosity with --bsdf-select decompose: the gather splits the \
+                        diffuse lobe itself; use mixture, static or mis"
+                    .into(),
+            );
+        }
+        if set.gather_depth == 0 {
+            return Err("--gather-depth: must be at least 1 (the first diffuse bounce)".into());
+        }
         let estimate = set
             .roulette
             .mode
             .uses_estimate()
             .then(|| RadianceEstimate::of_scene(scene));
-        Ok(Integrator { set, estimate })
+        let radiosity = if set.gather == Gather::Radiosity || set.kind == IntegratorKind::Radiosity
+        {
+            Some(Arc::new(Solution::compute(
+                scene,
+                &set.radiosity,
+                bands,
+                progress,
+            )?))
+        } else {
+            None
+        };
+        Ok(Integrator {
+            set,
+            estimate,
+            radiosity,
+            bdpt: bdpt::BdptOptions {
+                heuristic: set.mis,
+                strategies: bdpt::Strategies::All,
+            },
+        })
     }
 
     /// Whether this estimator sends splats (the film then keeps splat and batch sums).
     pub fn splats(&self) -> bool {
         match self.set.kind {
-            IntegratorKind::Path => false,
+            IntegratorKind::Path | IntegratorKind::Radiosity => false,
+            IntegratorKind::Bdpt => true,
             #[cfg(test)]
             IntegratorKind::SplatTest => true,
         }
@@ -181,15 +251,52 @@ impl Integrator {
         sink: &mut SplatSink,
         c: &mut Counters,
     ) -> [f32; 3] {
-        let _ = &sink; // the path tracer does not splat
+        let l_tilde = || match &self.estimate {
+            Some(e) => e.l_tilde::<N>(),
+            None => crate::spectrum::Spectrum::ZERO,
+        };
         match self.set.kind {
             IntegratorKind::Path => {
                 let ray = camera_ray(cam, x, y, s);
-                let l_tilde = match &self.estimate {
-                    Some(e) => e.l_tilde::<N>(),
-                    None => crate::spectrum::Spectrum::ZERO,
-                };
-                path::radiance::<N>(scene, ray, s, &self.set, &l_tilde, c).to_rgb()
+                match (&self.radiosity, self.set.gather) {
+                    (Some(sol), Gather::Radiosity) => gather::radiance::<N>(
+                        scene,
+                        sol,
+                        ray,
+                        s,
+                        &self.set,
+                        self.set.gather_depth,
+                        &l_tilde(),
+                        c,
+                    )
+                    .to_rgb(),
+                    _ => path::radiance::<N>(scene, ray, s, &self.set, &l_tilde(), c).to_rgb(),
+                }
+            }
+            IntegratorKind::Bdpt => {
+                let mut to_sink = |p: Vec2, rgb: [f32; 3]| sink.splat(p, rgb);
+                bdpt::sample_pixel_with::<N>(
+                    scene,
+                    cam,
+                    x,
+                    y,
+                    s,
+                    &self.set,
+                    &self.bdpt,
+                    c,
+                    &mut to_sink,
+                    None,
+                )
+            }
+            IntegratorKind::Radiosity => {
+                let ray = camera_ray(cam, x, y, s);
+                match &self.radiosity {
+                    Some(sol) => {
+                        gather::preview::<N>(scene, sol, ray, s, self.set.max_segments(), c)
+                            .to_rgb()
+                    }
+                    None => [0.0; 3],
+                }
             }
             #[cfg(test)]
             IntegratorKind::SplatTest => {

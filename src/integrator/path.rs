@@ -142,3 +142,19 @@ pub fn radiance<const N: usize>(
     }
     l
 }
+
+/// One sample of pixel (x, y), linear RGB, with no radiance estimate (L~ = 0): for tests
+/// and tools that compare estimators; renders go through `Integrator::sample`.
+#[inline]
+pub fn sample_pixel<const N: usize>(
+    scene: &Scene,
+    cam: &crate::scene::Camera,
+    x: u32,
+    y: u32,
+    s: &mut SampleStream,
+    set: &IntegratorSettings,
+    c: &mut Counters,
+) -> [f32; 3] {
+    let ray = super::camera_ray(cam, x, y, s);
+    radiance::<N>(scene, ray, s, set, &Spectrum::ZERO, c).to_rgb()
+}

@@ -10,7 +10,6 @@
 //! 4. region forming and the error-optimal filter, 5. display C = (C_d n + C_i,f N)/(n + N)
 //!    (both in `filter::dtf`, pure functions of the two films).
 
-use super::progress::Progress;
 use super::render::{render_pass, Counts, Pass, RenderSettings};
 use crate::film::Film;
 use crate::filter::dtf::{
@@ -18,6 +17,7 @@ use crate::filter::dtf::{
     DtfParams,
 };
 use crate::integrator::{Counters, Integrator};
+use crate::progress::Progress;
 use crate::scene::Scene;
 use std::time::Instant;
 
@@ -69,7 +69,7 @@ pub fn render_dtf(
     let t0 = Instant::now();
     let pixels = set.width as usize * set.height as usize;
     let mut planned = params.n as u64 * pixels as u64;
-    progress.set_total(planned);
+    progress.begin("samples", planned);
 
     // Phase of dependent tests: C_d, sigma^2 from n samples sharing random numbers.
     let mut dep_set = *set;

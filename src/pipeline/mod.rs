@@ -4,9 +4,8 @@
 //! estimator. `progress` is the small trait they report to.
 
 pub mod dtf;
-pub mod progress;
 pub mod render;
 
+pub use crate::progress::{Progress, Silent};
 pub use dtf::{render_dtf, DtfBudget, DtfRun};
-pub use progress::{Progress, Silent};
 pub use render::{render, render_pass, Budget, Counts, Pass, RenderOutput, RenderSettings};

@@ -4,9 +4,9 @@
 //! so the image is bit-identical for any thread count. Splats are collected per row and
 //! added to the film after the pass, in row order.
 
-use super::progress::Progress;
 use crate::film::{Film, PixelStats, Rejections};
 use crate::integrator::{Counters, Integrator, IntegratorSettings, Splat, SplatSink};
+use crate::progress::Progress;
 use crate::sampling::{SampleStream, SamplerConfig};
 use crate::scene::{Camera, CameraDesc, Scene};
 use crate::spectrum::SpectralMode;
@@ -229,7 +229,7 @@ pub fn render(
     };
     match budget {
         Budget::Spp(n) => {
-            progress.set_total(pixels * n as u64);
+            progress.begin("samples", pixels * n as u64);
             // Passes of several samples keep the progress alive on long renders; a
             // splatting estimator's passes are kept small (their splats are buffered).
             let size = pass_size(n, integrator.splats(), pixels);
@@ -244,7 +244,7 @@ pub fn render(
             }
         }
         Budget::Time(secs) => {
-            progress.set_total(pixels);
+            progress.begin("samples", pixels);
             loop {
                 one_pass(&mut film, 1, spp);
                 if progress.cancelled() {
@@ -302,7 +302,8 @@ mod tests {
             integrator: Default::default(),
         };
         set.integrator.kind = IntegratorKind::SplatTest;
-        let integ = Integrator::prepare(&scene, set.integrator).unwrap();
+        let integ =
+            Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap();
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)

@@ -24,6 +24,7 @@ pub const NAMES: &[&str] = &[
     "furnace-glossy",
     "room",
     "caustic",
+    "rw-room",
 ];
 
 /// One line per built-in scene, for `kalos scenes`.
@@ -50,6 +51,7 @@ pub fn describe() -> Vec<(&'static str, &'static str)> {
             "architectural interior like the DTF paper's: large walls, furniture, glossy floor, 600x600",
         ),
         ("caustic", "room lit by a lamp whose light leaves only through a glass sphere: a caustic on the floor, 256x256"),
+        ("rw-room", "Rushmeier and Ward's figure 4: yellow-brown room, blue and red mirror boxes throwing caustics"),
     ]
 }
 
@@ -271,6 +273,7 @@ pub fn load(name: &str) -> Result<Option<SceneDesc>, String> {
         "furnace-glossy" => Some(furnace_glossy()),
         "room" => Some(room()?),
         "caustic" => Some(caustic()),
+        "rw-room" => Some(rw_room()),
         _ => None,
     })
 }
@@ -389,4 +392,124 @@ pub fn push_sphere(d: &mut SceneDesc, c: Vec3, r: f32, stacks: u32, slices: u32,
             }
         }
     }
+}
+
+/// Rushmeier and Ward's figure 4 ("Energy preserving non-linear filters", 1994): a
+/// yellow-brown room (4 x 2.6 x 5, walls split into 14 x 14 quads: some 2400 triangles)
+/// lit by a small panel just below the ceiling, with a small blue and a small red
+/// mirror box on the floor. Their tops throw caustics onto the ceiling (the blue one near
+/// the light), their sides onto the floor; the blue box casts a wide penumbra on the left
+/// wall.
+fn rw_room() -> SceneDesc {
+    let mut d = SceneDesc {
+        name: "rw-room".into(),
+        ..Default::default()
+    };
+    let mut mat = |name: &str, kd: [f32; 3], ks: [f32; 3], illum: u8, ke: [f32; 3]| {
+        let mut m = MaterialDesc::named(name);
+        m.kd = kd;
+        m.ks = ks;
+        m.illum = illum;
+        m.ke = ke;
+        d.materials.push(m);
+        d.materials.len() as u32 - 1
+    };
+    let walls = mat("walls", [0.62, 0.48, 0.27], [0.0; 3], 2, [0.0; 3]);
+    let floor = mat("floor", [0.45, 0.34, 0.2], [0.0; 3], 2, [0.0; 3]);
+    let ceiling = mat("ceiling", [0.7, 0.6, 0.42], [0.0; 3], 2, [0.0; 3]);
+    let light = mat("light", [0.0; 3], [0.0; 3], 2, [16.0, 15.0, 12.5]);
+    let blue = mat("blue-mirror", [0.0; 3], [0.2, 0.32, 0.9], 5, [0.0; 3]);
+    let red = mat("red-mirror", [0.0; 3], [0.9, 0.22, 0.18], 5, [0.0; 3]);
+
+    // a planar quad [v0, v1, v2, v3] (a parallelogram) split into k x k quads
+    let grid = |d: &mut SceneDesc, v: [Vec3; 4], k: u32, m: u32| {
+        let (a, b) = (v[1] - v[0], v[3] - v[0]);
+        let p = |i: u32, j: u32| v[0] + a * (i as f32 / k as f32) + b * (j as f32 / k as f32);
+        for i in 0..k {
+            for j in 0..k {
+                push_quad(d, [p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1)], m);
+            }
+        }
+    };
+    // the room [-2, 2] x [0, 2.6] x [-2.5, 2.5], faces seen from inside
+    let (x0, x1, y0, y1, z0, z1) = (-2.0, 2.0, 0.0, 2.6, -2.5, 2.5);
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let k = 14;
+    grid(
+        &mut d,
+        [p(x0, y0, z0), p(x0, y0, z1), p(x1, y0, z1), p(x1, y0, z0)],
+        k,
+        floor,
+    );
+    grid(
+        &mut d,
+        [p(x0, y1, z0), p(x1, y1, z0), p(x1, y1, z1), p(x0, y1, z1)],
+        k,
+        ceiling,
+    );
+    grid(
+        &mut d,
+        [p(x0, y0, z0), p(x0, y1, z0), p(x0, y1, z1), p(x0, y0, z1)],
+        k,
+        walls,
+    );
+    grid(
+        &mut d,
+        [p(x1, y0, z0), p(x1, y0, z1), p(x1, y1, z1), p(x1, y1, z0)],
+        k,
+        walls,
+    );
+    grid(
+        &mut d,
+        [p(x0, y0, z0), p(x1, y0, z0), p(x1, y1, z0), p(x0, y1, z0)],
+        k,
+        walls,
+    );
+    grid(
+        &mut d,
+        [p(x0, y0, z1), p(x0, y1, z1), p(x1, y1, z1), p(x1, y0, z1)],
+        k,
+        walls,
+    );
+    // the light: a 0.6 x 0.6 panel facing down, 0.12 below the ceiling
+    let ly = y1 - 0.12;
+    push_quad(
+        &mut d,
+        [
+            p(-0.5, ly, -1.1),
+            p(0.1, ly, -1.1),
+            p(0.1, ly, -0.5),
+            p(-0.5, ly, -0.5),
+        ],
+        light,
+    );
+    // the mirror boxes: centre of the base, half width, height, rotation about y
+    let mut boxed = |c: Vec3, h: f32, height: f32, angle: f32, m: u32| {
+        let (s, co) = angle.to_radians().sin_cos();
+        let q = |ix: u32, iy: u32, iz: u32| {
+            let (lx, lz) = (if ix == 1 { h } else { -h }, if iz == 1 { h } else { -h });
+            c + Vec3::new(co * lx + s * lz, iy as f32 * height, -s * lx + co * lz)
+        };
+        // outward faces, counter-clockwise seen from outside
+        push_quad(&mut d, [q(1, 0, 0), q(1, 1, 0), q(1, 1, 1), q(1, 0, 1)], m);
+        push_quad(&mut d, [q(0, 0, 0), q(0, 0, 1), q(0, 1, 1), q(0, 1, 0)], m);
+        push_quad(&mut d, [q(0, 1, 0), q(0, 1, 1), q(1, 1, 1), q(1, 1, 0)], m);
+        push_quad(&mut d, [q(0, 0, 0), q(1, 0, 0), q(1, 0, 1), q(0, 0, 1)], m);
+        push_quad(&mut d, [q(0, 0, 1), q(1, 0, 1), q(1, 1, 1), q(0, 1, 1)], m);
+        push_quad(&mut d, [q(0, 0, 0), q(0, 1, 0), q(1, 1, 0), q(1, 0, 0)], m);
+    };
+    boxed(p(-1.0, 0.0, -1.2), 0.3, 0.7, 30.0, blue);
+    boxed(p(1.0, 0.0, 0.3), 0.22, 0.45, -20.0, red);
+    d.camera = Some(CameraDesc {
+        origin: [0.2, 1.4, 2.4],
+        target: [-0.1, 0.9, -1.0],
+        up: [0.0, 1.0, 0.0],
+        fov: 62.0,
+    });
+    d.defaults = RenderDefaults {
+        res: Some((256, 256)),
+        spp: None,
+        max_depth: None,
+    };
+    d
 }

@@ -32,7 +32,7 @@ pub fn settings(scene: &Scene, w: u32, h: u32) -> RenderSettings {
 }
 
 pub fn render_spp(scene: &Scene, set: &RenderSettings, spp: u32) -> Film {
-    let integ = Integrator::prepare(scene, set.integrator).unwrap();
+    let integ = Integrator::prepare(scene, set.integrator, set.spectral.bands(), &Silent).unwrap();
     render(scene, &integ, set, Budget::Spp(spp), 0, &Silent)
         .unwrap()
         .film

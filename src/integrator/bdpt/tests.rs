@@ -115,6 +115,7 @@ fn settings(mode: RrMode, max_depth: i32) -> IntegratorSettings {
             mode,
             ..Default::default()
         },
+        ..Default::default()
     }
 }
 
@@ -706,7 +707,7 @@ fn caustic_light_leaves_only_through_the_sphere() {
             .unwrap();
         let (d, _) = scene.lights.sample_direction(ls.light, rng.next_2d());
         let ray = Ray::new(offset_origin(ls.p, ls.n, d), d);
-        let Some(hit) = intersect(&scene, &ray, f32::INFINITY) else {
+        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
             continue;
         };
         match scene.material_of(hit.prim).name.as_str() {

@@ -1,10 +1,16 @@
-//! Progress of a render as a small trait: the pipelines report the work they plan and the
+//! Progress of long work as a small trait (it sits below every stage that reports: the
+//! radiosity preprocess, the pipelines): they report the work they plan and the
 //! work done, and ask whether to stop (Ctrl-C, a Python KeyboardInterrupt). The CLI's
 //! progress bar and log lines are one implementation (`cli::progress`); `Silent` is none.
 
 /// What a pipeline tells about its progress, in camera samples.
 pub trait Progress: Sync {
-    /// The total work changed (samples planned so far).
+    /// A new stage of work begins (the radiosity preprocess, the samples of a render),
+    /// with `total` units of `unit` planned; what was done before does not count.
+    fn begin(&self, _unit: &str, total: u64) {
+        self.set_total(total)
+    }
+    /// The total work changed (units planned so far in this stage).
     fn set_total(&self, _samples: u64) {}
     /// `samples` more samples are done.
     fn advance(&self, _samples: u64) {}

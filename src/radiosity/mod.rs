@@ -1,0 +1,428 @@
+//! The radiosity preprocess of Rushmeier and Ward's Monte Carlo path tracer ("Energy
+//! preserving non-linear filters", SIGGRAPH 1994, section 4.1: "values from a radiosity
+//! preprocess are used" for the incident radiance of diffuse-like surfaces; the
+//! progressive multi-pass method of Chen et al. 1991).
+//!
+//! - `mesh`: the diffuse-like and emissive triangles split 4-way to a maximum element
+//!   area, vertices welded.
+//! - `solve`: form factors by ray casting with visibility, progressive refinement by
+//!   shooting, on every spectral band of the render.
+//! - `Solution`: per-vertex radiosity B on both sides of every element (nodal averages of
+//!   the element values, area-weighted), interpolated with barycentrics; for a hit point
+//!   on a scene triangle the reflected radiance (B - E) / pi, or B / pi.
+//! - `ply`: the meshed solution as a vertex-coloured PLY (MeshLab, Blender).
+//!
+//! Only the diffuse reflectance (Kd, a texture by its mean) takes part: glossy lobes,
+//! mirrors and glass are not meshed, and mirrors and glass only block light here (the
+//! path tracer follows them). Emitters keep their exact emission E = pi L_e (the
+//! cosine-weighted average for directional emission) on their front side.
+
+pub mod mesh;
+pub mod ply;
+pub mod solve;
+#[cfg(test)]
+mod tests;
+
+use crate::material::Bsdf;
+use crate::math::Vec3;
+use crate::progress::Progress;
+use crate::scene::Scene;
+use crate::spectrum::Spectrum;
+use mesh::Mesh;
+use std::time::Instant;
+
+/// Largest mesh kalos agrees to allocate (element and vertex arrays together).
+pub const MAX_MESH_BYTES: u64 = 4 << 30;
+
+/// Settings of the preprocess: each option's name, help and default written once here.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, clap::Args)]
+#[serde(default, deny_unknown_fields)]
+pub struct RadiositySettings {
+    /// Radiosity: largest element area in scene units^2 (default: the meshed area / 1500, a
+    /// few thousand elements on cornell).
+    #[arg(long = "radiosity-max-area")]
+    pub max_area: Option<f32>,
+    /// Radiosity: stop when the unshot power is below this fraction of the emitted.
+    #[arg(long = "radiosity-tolerance", default_value_t = 1e-3)]
+    pub tolerance: f64,
+    /// Radiosity: 4^level points on a source element (1: four points).
+    #[arg(long = "radiosity-source-level", default_value_t = 1)]
+    pub source_level: u32,
+    /// Radiosity: at most this many elements (the solver's time grows as elements^2).
+    #[arg(long = "radiosity-max-elements", default_value_t = 1 << 21)]
+    pub max_elements: u64,
+    /// Radiosity: at most this many shots (default: 200 per patch).
+    #[arg(long = "radiosity-max-shots")]
+    pub max_shots: Option<u64>,
+}
+
+/// The default max area is the meshed area divided by this.
+pub const DEFAULT_ELEMENTS: f64 = 1500.0;
+
+impl Default for RadiositySettings {
+    fn default() -> Self {
+        crate::options::defaults::<RadiositySettings>()
+    }
+}
+
+impl RadiositySettings {
+    pub fn validate(&self) -> Result<(), String> {
+        if let Some(a) = self.max_area {
+            if !(a.is_finite() && a > 0.0) {
+                return Err(format!("--radiosity-max-area {a}: must be a positive area"));
+            }
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance < 1.0) {
+            return Err(format!(
+                "--radiosity-tolerance {}: must be between 0 and 1 (a fraction of the emitted power)",
+                self.tolerance
+            ));
+        }
+        if self.source_level > 4 {
+            return Err(format!(
+                "radiosity source_level {}: at most 4 (256 points per element)",
+                self.source_level
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What the preprocess did (`--stats`).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RadiosityStats {
+    pub elements: u64,
+    pub vertices: u64,
+    pub bands: usize,
+    pub max_area: f64,
+    pub tolerance: f64,
+    pub shots: u64,
+    pub rays: u64,
+    pub mesh_seconds: f64,
+    pub solve_seconds: f64,
+    pub seconds: f64,
+    /// Emitted power (band average of E x A).
+    pub emitted_power: f64,
+    /// Unshot power left, as a fraction of the emitted.
+    pub residual_unshot: f64,
+    /// False if `max_shots` stopped the solver before the tolerance.
+    pub converged: bool,
+}
+
+/// The immutable radiosity solution the estimators read.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    pub bands: usize,
+    pub mesh: Mesh,
+    /// B per vertex, side and band: index ((2 v + side) * bands + band).
+    pub vertex_b: Vec<f32>,
+    /// B per element, side and band (the solver's values).
+    pub element_b: Vec<f32>,
+    /// Unshot radiosity dB per element, side and band when the solver stopped.
+    pub element_unshot: Vec<f32>,
+    /// Emitted radiosity E = pi L_e (front side) per scene triangle and band (empty for
+    /// triangles that are not meshed).
+    pub tri_e: Vec<Vec<f32>>,
+    pub stats: RadiosityStats,
+}
+
+/// Uplift a linear RGB triple to `bands` bands as the path tracer does.
+fn uplift(rgb: [f32; 3], bands: usize) -> Result<Vec<f64>, String> {
+    let v: Vec<f32> = match bands {
+        3 => Spectrum::<3>::from_rgb(rgb).0.to_vec(),
+        8 => Spectrum::<8>::from_rgb(rgb).0.to_vec(),
+        16 => Spectrum::<16>::from_rgb(rgb).0.to_vec(),
+        _ => {
+            return Err(format!(
+                "radiosity: {bands} spectral bands (expected 3, 8 or 16)"
+            ))
+        }
+    };
+    Ok(v.into_iter().map(|x| x as f64).collect())
+}
+
+/// The diffuse reflectance of a material (Kd; a texture by its mean), None if it has no
+/// diffuse lobe.
+fn diffuse_kd(scene: &Scene, m: u32) -> Option<[f32; 3]> {
+    let mat = &scene.materials[m as usize];
+    let kd = match mat.bsdf {
+        Bsdf::Diffuse(l) => l.kd,
+        Bsdf::DiffuseGlossy(l, _) => l.kd,
+        _ => return None,
+    };
+    let kd = match mat.kd_texture {
+        Some(t) => scene.textures[t as usize].mean(),
+        None => kd,
+    };
+    (kd.iter().any(|&v| v > 0.0)).then_some(kd)
+}
+
+impl Solution {
+    /// Mesh the scene and solve on `bands` bands (3, 8 or 16).
+    pub fn compute(
+        scene: &Scene,
+        set: &RadiositySettings,
+        bands: usize,
+        progress: &dyn Progress,
+    ) -> Result<Solution, String> {
+        set.validate()?;
+        let t0 = Instant::now();
+        let name = &scene.info.name;
+        // --- which triangles take part, at which level
+        let nt = scene.tris.len();
+        let mut kd: Vec<Option<[f32; 3]>> = Vec::with_capacity(nt);
+        let mut any_diffuse = false;
+        let mut area_total = 0.0f64;
+        let mut areas = Vec::with_capacity(nt);
+        for (t, tri) in scene.tris.iter().enumerate() {
+            let m = scene.tri_material[t];
+            let d = diffuse_kd(scene, m);
+            any_diffuse |= d.is_some();
+            let meshed = d.is_some() || scene.materials[m as usize].is_emissive();
+            let a = 0.5 * (tri[1] - tri[0]).cross(tri[2] - tri[0]).length() as f64;
+            if meshed {
+                area_total += a;
+            }
+            areas.push(meshed.then_some(a));
+            kd.push(d);
+        }
+        if !any_diffuse {
+            return Err(format!(
+                "scene {name}: no diffuse surface, the radiosity preprocess has nothing to solve"
+            ));
+        }
+        if scene.lights.is_empty() {
+            return Err(format!(
+                "scene {name}: no emitter, the radiosity preprocess has nothing to shoot"
+            ));
+        }
+        let max_area = match set.max_area {
+            Some(a) => a as f64,
+            None => area_total / DEFAULT_ELEMENTS,
+        };
+        let levels: Vec<Option<u32>> = areas
+            .iter()
+            .map(|a| a.map(|a| mesh::level_for(a, max_area)))
+            .collect();
+        // --- refuse a mesh too fine before allocating it
+        let (ne, nv) = mesh::count(&levels);
+        let bytes = ne as f64 * (std::mem::size_of::<mesh::Element>() + 48 * bands) as f64
+            + nv as f64 * (12.0 + 4.0 + 8.0 * bands as f64 + 48.0);
+        if levels.iter().flatten().any(|&l| l > mesh::MAX_LEVEL)
+            || ne > set.max_elements
+            || bytes > MAX_MESH_BYTES as f64
+        {
+            return Err(format!(
+                "--radiosity-max-area {max_area:.3e}: the mesh would have {ne} elements ({:.1} GiB); kalos allows {} elements and {} GiB",
+                bytes / (1u64 << 30) as f64,
+                set.max_elements,
+                MAX_MESH_BYTES >> 30
+            ));
+        }
+        let weld_key: Vec<u32> = scene.tri_material.clone();
+        let scale = scene.bvh.bounds().diagonal();
+        let mesh = mesh::build(&scene.tris, &levels, &weld_key, scale);
+        let mesh_seconds = t0.elapsed().as_secs_f64();
+
+        // --- rho and E per element and band
+        let nb = bands;
+        let mut tri_e: Vec<Vec<f32>> = vec![Vec::new(); nt];
+        let mut tri_rho: Vec<Vec<f64>> = vec![Vec::new(); nt];
+        for t in 0..nt {
+            if levels[t].is_none() {
+                continue;
+            }
+            let mat = &scene.materials[scene.tri_material[t] as usize];
+            let e = uplift(mat.emission, nb)?;
+            tri_e[t] = e
+                .iter()
+                .map(|&v| (v * std::f64::consts::PI) as f32)
+                .collect();
+            tri_rho[t] = uplift(kd[t].unwrap_or([0.0; 3]), nb)?;
+        }
+        let ne = mesh.elems.len();
+        let mut rho = vec![0.0f64; ne * nb];
+        let mut b = vec![0.0f64; 2 * ne * nb];
+        let mut emitted = 0.0;
+        for (i, e) in mesh.elems.iter().enumerate() {
+            let t = e.prim as usize;
+            rho[i * nb..(i + 1) * nb].copy_from_slice(&tri_rho[t]);
+            for k in 0..nb {
+                let ev = tri_e[t][k] as f64;
+                b[2 * i * nb + k] = ev; // front side only
+                emitted += ev * e.area as f64 / nb as f64;
+            }
+        }
+        let db = b.clone();
+        let mut sh = solve::Shooter {
+            bvh: &scene.bvh,
+            elems: &mesh.elems,
+            bands: nb,
+            rho,
+            b,
+            db,
+            patterns: solve::Patterns::new(set.source_level),
+            emitted_power: emitted,
+            shots: 0,
+            rays: 0,
+        };
+
+        // --- shoot until the unshot power is below tolerance x emitted
+        let max_shots = set.max_shots.unwrap_or(200 * 2 * ne as u64);
+        progress.message(&format!("radiosity: solving {ne} elements"));
+        // progress in thousandths of the way from log(1) to log(tolerance)
+        progress.begin("permille", 1000);
+        let mut shown = 0u64;
+        let t1 = Instant::now();
+        let mut residual;
+        loop {
+            let (p, total) = sh.most_unshot();
+            residual = if emitted > 0.0 { total / emitted } else { 0.0 };
+            if residual <= set.tolerance || sh.shots >= max_shots {
+                break;
+            }
+            if !residual.is_finite() || residual > 100.0 {
+                return Err(format!(
+                    "scene {name}: the radiosity iteration diverged after {} shots (unshot power {residual:.3e} x the emitted): reflectances above 1?",
+                    sh.shots
+                ));
+            }
+            sh.shoot(p);
+            if sh.shots.is_multiple_of(16) {
+                if progress.cancelled() {
+                    return Err(format!(
+                        "scene {name}: the radiosity preprocess was interrupted"
+                    ));
+                }
+                // progress: how far log(residual) has come towards log(tolerance)
+                let f = (residual.ln() / set.tolerance.ln()).clamp(0.0, 1.0);
+                let now = (f * 1000.0) as u64;
+                if now > shown {
+                    progress.advance(now - shown);
+                    shown = now;
+                }
+            }
+        }
+        progress.advance(1000 - shown.min(1000));
+        progress.finish();
+        let solve_seconds = t1.elapsed().as_secs_f64();
+
+        // --- nodal averages: B at a vertex is the area-weighted mean of its elements'
+        let nvtx = mesh.verts.len();
+        let mut acc = vec![0.0f64; 2 * nvtx * nb];
+        let mut wsum = vec![0.0f64; nvtx];
+        for (i, e) in mesh.elems.iter().enumerate() {
+            let a = e.area as f64;
+            for &v in &e.v {
+                let v = v as usize;
+                wsum[v] += a;
+                for k in 0..2 * nb {
+                    acc[2 * v * nb + k] += a * sh.b[2 * i * nb + k];
+                }
+            }
+        }
+        let vertex_b: Vec<f32> = acc
+            .iter()
+            .enumerate()
+            .map(|(k, &s)| {
+                let w = wsum[k / (2 * nb)];
+                if w > 0.0 {
+                    (s / w) as f32
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let element_b: Vec<f32> = sh.b.iter().map(|&v| v as f32).collect();
+        let element_unshot: Vec<f32> = sh.db.iter().map(|&v| v as f32).collect();
+        let stats = RadiosityStats {
+            elements: ne as u64,
+            vertices: nvtx as u64,
+            bands: nb,
+            max_area,
+            tolerance: set.tolerance,
+            shots: sh.shots,
+            rays: sh.rays,
+            mesh_seconds,
+            solve_seconds,
+            seconds: t0.elapsed().as_secs_f64(),
+            emitted_power: emitted,
+            residual_unshot: residual,
+            converged: residual <= set.tolerance,
+        };
+        Ok(Solution {
+            bands: nb,
+            mesh,
+            vertex_b,
+            element_b,
+            element_unshot,
+            tri_e,
+            stats,
+        })
+    }
+
+    /// Interpolated B (per band, into `out`) at point `p` of scene triangle `prim`, on
+    /// the front (`front`: the side its winding faces) or back side. False if the
+    /// triangle is not meshed (mirror, glass, black).
+    #[inline]
+    pub fn radiosity_into(&self, prim: u32, p: Vec3, front: bool, out: &mut [f32]) -> bool {
+        let Some(Some(tm)) = self.mesh.tris.get(prim as usize) else {
+            return false;
+        };
+        let nb = self.bands;
+        let (b1, b2) = mesh::barycentrics(tm.v0, tm.e1, tm.e2, p);
+        let (_, corners) = mesh::locate(tm.level, b1, b2);
+        let n = 1u32 << tm.level;
+        let side = if front { 0 } else { 1 };
+        for o in out.iter_mut() {
+            *o = 0.0;
+        }
+        for (i, j, w) in corners {
+            let v = self.mesh.grid[(tm.first_grid + mesh::grid_index(n, i, j)) as usize] as usize;
+            let base = (2 * v + side) * nb;
+            for (k, o) in out.iter_mut().enumerate().take(nb) {
+                *o += w * self.vertex_b[base + k];
+            }
+        }
+        true
+    }
+
+    /// B / pi: the radiance a diffuse surface sends, emission included (the preview).
+    #[inline]
+    pub fn radiance<const N: usize>(&self, prim: u32, p: Vec3, front: bool) -> Option<Spectrum<N>> {
+        debug_assert_eq!(N, self.bands);
+        let mut s = [0.0f32; N];
+        if !self.radiosity_into(prim, p, front, &mut s) {
+            return None;
+        }
+        Some(Spectrum(s) * std::f32::consts::FRAC_1_PI)
+    }
+
+    /// (B - E) / pi: the reflected radiance only (what the gather looks up), clamped at 0.
+    #[inline]
+    pub fn reflected<const N: usize>(
+        &self,
+        prim: u32,
+        p: Vec3,
+        front: bool,
+    ) -> Option<Spectrum<N>> {
+        debug_assert_eq!(N, self.bands);
+        let mut s = [0.0f32; N];
+        if !self.radiosity_into(prim, p, front, &mut s) {
+            return None;
+        }
+        if front {
+            let e = &self.tri_e[prim as usize];
+            for (v, ev) in s.iter_mut().zip(e) {
+                *v -= ev;
+            }
+        }
+        Some(Spectrum(s).map(|v| v.max(0.0) * std::f32::consts::FRAC_1_PI))
+    }
+
+    /// Whether triangle `prim` has a solution (it is diffuse-like or emissive).
+    #[inline]
+    pub fn covers(&self, prim: u32) -> bool {
+        matches!(self.mesh.tris.get(prim as usize), Some(Some(_)))
+    }
+}
