@@ -78,7 +78,7 @@ fn main() {
     }
 
     let p0 = DtfParams {
-        n,
+        n: Some(n),
         ..Default::default()
     };
     let run = render_dtf(

@@ -30,8 +30,8 @@ fn main() {
     )
     .unwrap();
     let p = DtfParams {
-        n: 32,
-        eps_r: eps,
+        n: Some(32),
+        eps_r: Some(eps),
         ..Default::default()
     };
     let run = render_dtf(&scene, &integ, &set, &p, DtfBudget::RelativeError, &Silent).unwrap();

@@ -36,6 +36,8 @@ pub enum Method {
 pub const DEFAULT_SPP: u32 = 64;
 /// Resolution when neither the job nor the scene file says.
 pub const DEFAULT_RES: (u32, u32) = (256, 256);
+/// Renders planned with at least this many samples say so before they start.
+pub const LARGE_RENDER_SAMPLES: u64 = 1 << 30;
 /// Worker threads are capped at this multiple of the logical CPUs.
 pub const MAX_THREADS_PER_CPU: usize = 4;
 
@@ -311,7 +313,9 @@ pub fn render_scene(
             let budget = match (job.time, job.spp) {
                 (Some(t), _) => DtfBudget::Time(t),
                 (None, Some(n)) => DtfBudget::Spp(n as f64),
-                (None, None) => DtfBudget::RelativeError,
+                (None, None) if params.eps_r.is_some() => DtfBudget::RelativeError,
+                // the same average samples per pixel as a plain render of the scene
+                (None, None) => DtfBudget::Spp(scene.defaults.spp.unwrap_or(DEFAULT_SPP) as f64),
             };
             let run = pool.install(|| {
                 pipeline::render_dtf(scene, &integrator, &set, params, budget, progress)
@@ -319,7 +323,7 @@ pub fn render_scene(
             let mut film = run.independent.clone();
             film.merge(&run.dependent);
             let stats = DtfStats {
-                n: params.n,
+                n: run.n,
                 average_n: run.average_n(),
                 phase1_seconds: run.phase1_seconds,
                 phase2_seconds: run.phase2_seconds,
@@ -451,8 +455,8 @@ mod tests {
         assert_eq!(j.roulette.weight, RrWeight::Luminance);
         assert_eq!(j.roulette.select, BsdfSelect::Mixture);
         assert_eq!(j.roulette.min_depth, 0);
-        assert_eq!(j.dtf.n, 50);
-        assert_eq!(j.dtf.eps_r, 0.03);
+        assert_eq!(j.dtf.n, None);
+        assert_eq!(j.dtf.eps_r, None);
         assert_eq!(j.dtf.categories, vec![0, 1, 10, 20, 50, 100, 200, 500]);
         assert!(j.dtf.cost_aware);
         assert_eq!(j.dtf, DtfParams::default());

@@ -610,3 +610,101 @@ fn a_valid_tiny_experiment_still_runs() {
         assert!(out.join(f).exists(), "{f} missing: {err}");
     }
 }
+
+#[test]
+fn two_outputs_on_one_path_are_refused() {
+    let d = temp_dir("same");
+    let out = d.join("same.pfm").display().to_string();
+    let (code, err) = render(&d, "cornell", &["-o", &out, "--stats", &out]);
+    assert_one_line_error(
+        "--stats = -o",
+        code,
+        &err,
+        1,
+        &["--stats", "same.pfm", "two outputs"],
+    );
+    assert!(!Path::new(&out).exists(), "nothing is written");
+    // an output folder that does not exist is refused before the work
+    let (code, err) = render(&d, "cornell", &["-o", "/nonexistent-kalos-dir/x.exr"]);
+    assert_one_line_error("missing folder", code, &err, 1, &["does not exist"]);
+}
+
+#[test]
+fn black_images_and_ignored_options_are_warned() {
+    let d = temp_dir("warn");
+    // a camera looking away from the Cornell box: all black
+    let (code, err) = render(&d, "cornell", &["--camera", "0,1,20,0,1,40,0,1,0,30"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("warning: the image is all black"), "{err}");
+    // the box seen: no such warning
+    let (code, err) = render(&d, "cornell", &[]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("all black"), "{err}");
+    // --aovs with a PNG
+    let png = d.join("o.png").display().to_string();
+    let (code, err) = render(&d, "cornell", &["--aovs", "-o", &png]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("warning: --aovs"), "{err}");
+    // absurd thread counts are capped, with a warning, and the render ends
+    let (code, _, err) = kalos_within(
+        60,
+        &[
+            "render",
+            "cornell",
+            "--res",
+            "4x4",
+            "--spp",
+            "1",
+            "--threads",
+            "100000",
+            "-o",
+            &png,
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("--threads 100000: capped"), "{err}");
+}
+
+/// SIGTERM (as Ctrl-C) writes the passes rendered so far, says so, exits non-zero; a
+/// render with stderr on a pipe prints progress lines; a huge render says what it plans.
+#[test]
+fn an_interrupted_render_writes_what_it_has() {
+    let d = temp_dir("interrupt");
+    let out = d.join("part.exr");
+    let child = Command::new(env!("CARGO_BIN_EXE_kalos"))
+        .args([
+            "render",
+            "cornell",
+            "--res",
+            "32x32",
+            "--spp",
+            "4294967295",
+            "--threads",
+            "1",
+        ])
+        .arg("-o")
+        .arg(&out)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(3500));
+    let ok = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("samples planned"), "{err}");
+    assert!(
+        err.contains("samples/s") && err.contains('%'),
+        "no progress lines: {err}"
+    );
+    assert!(err.contains("interrupted"), "{err}");
+    let img = kalos::image_io::read_image(&out).unwrap();
+    assert!(
+        img.mean().iter().all(|&m| m > 0.05),
+        "the image is not rendered"
+    );
+}

@@ -12,7 +12,7 @@ fn dtf_on_the_furnace_is_one() {
     let scene = kalos::scene::load("furnace").unwrap();
     let set = settings(&scene, 16, 16);
     let params = DtfParams {
-        n: 16,
+        n: Some(16),
         ..Default::default()
     };
     let run = render_dtf(
@@ -48,7 +48,7 @@ fn budget_mode_spends_the_budget() {
     let scene = kalos::scene::load("cornell").unwrap();
     let set = settings(&scene, 32, 32);
     let params = DtfParams {
-        n: 8,
+        n: Some(8),
         ..Default::default()
     };
     let run = render_dtf(
@@ -85,7 +85,7 @@ fn dtf_error_keeps_falling_with_the_budget() {
     let set = settings(&scene, 48, 48);
     let reference = render_spp(&scene, &set, 4096).mean_rgb();
     let params = DtfParams {
-        n: 16,
+        n: Some(16),
         ..Default::default()
     };
     let mut last = f64::INFINITY;

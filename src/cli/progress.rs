@@ -1,5 +1,5 @@
 //! The CLI's `Progress`: an indicatif bar on a terminal; on a pipe or a log file (farm
-//! jobs) a line every 5% or 30 s with the rate and the time left; Ctrl-C and SIGTERM
+//! jobs) a line every 5% or 10 s with the rate and the time left; Ctrl-C and SIGTERM
 //! stop the render at the next row, and what was rendered is written.
 
 use crate::pipeline::Progress;
@@ -121,8 +121,9 @@ impl Progress for CliProgress {
         let total = self.total.load(Ordering::Relaxed).max(1);
         let twentieth = done * 20 / total;
         let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
-        // renders shorter than a second print nothing
-        if el >= 1.0 && (twentieth > last.0 || el - last.1 >= 30.0) {
+        // renders shorter than a second print nothing; then a line at 1 s, per 5% or 10 s
+        let every = if last.1 == 0.0 { 1.0 } else { 10.0 };
+        if el >= 1.0 && (twentieth > last.0 || el - last.1 >= every) {
             *last = (twentieth, el);
             let r = done as f64 / el.max(1e-9);
             let left = total.saturating_sub(done) as f64 / r.max(1e-9);

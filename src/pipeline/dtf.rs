@@ -34,6 +34,8 @@ pub enum DtfBudget {
 
 /// Everything DTF produced, for images, layers and statistics.
 pub struct DtfRun {
+    /// n: the dependent samples per pixel of phase 1.
+    pub n: u32,
     pub dependent: Film,
     pub independent: Film,
     /// N[p]: the independent samples each pixel got (allocation plus top-ups).
@@ -68,7 +70,13 @@ pub fn render_dtf(
     params.validate()?;
     let t0 = Instant::now();
     let pixels = set.width as usize * set.height as usize;
-    let mut planned = params.n as u64 * pixels as u64;
+    // n: --dtf-n, or what the budget suggests (`DtfParams::n_for`)
+    let n = match budget {
+        DtfBudget::Spp(spp) => params.n_for(Some(spp), false),
+        DtfBudget::Time(_) => params.n_for(None, false),
+        DtfBudget::RelativeError => params.n_for(None, true),
+    };
+    let mut planned = n as u64 * pixels as u64;
     progress.begin("samples", planned);
 
     // Phase of dependent tests: C_d, sigma^2 from n samples sharing random numbers.
@@ -94,7 +102,7 @@ pub fn render_dtf(
     };
     let mut counters = pass(
         &dep_set,
-        Counts::Uniform(params.n),
+        Counts::Uniform(n),
         0,
         &mut dependent,
         Some(&mut rays),
@@ -125,11 +133,11 @@ pub fn render_dtf(
     let (alloc, rest_spp) = match budget {
         DtfBudget::RelativeError => (allocate_relative(&dependent, params)?, 0.0),
         DtfBudget::Spp(total) => {
-            let rest = total - params.n as f64;
+            let rest = total - n as f64;
             if rest < 0.0 {
                 return Err(format!(
                     "--spp {total}: in DTF budget mode it is the average over both phases and must be at least --dtf-n {}",
-                    params.n
+                    n
                 ));
             }
             (
@@ -139,7 +147,7 @@ pub fn render_dtf(
         }
         DtfBudget::Time(secs) => {
             // samples per second measured in phase 1; keep ~2% of the budget for the filter
-            let rate = (params.n as f64 * pixels as f64) / phase1_seconds.max(1e-9);
+            let rate = (n as f64 * pixels as f64) / phase1_seconds.max(1e-9);
             let left = (secs * 0.98 - phase1_seconds).max(0.0);
             let rest = rate * left / pixels as f64;
             (
@@ -222,6 +230,7 @@ pub fn render_dtf(
     let out = dtf_filter(&dependent, &independent, &classes, params)?;
     progress.finish();
     Ok(DtfRun {
+        n,
         filter_seconds: out.seconds,
         dependent,
         independent,

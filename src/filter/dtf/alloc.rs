@@ -134,7 +134,7 @@ fn relative_counts(
     zero_when_met: bool,
 ) -> Result<Vec<u32>, String> {
     params.validate()?;
-    let eps = params.eps_r as f64;
+    let eps = params.eps()?;
     let stats = robust_stats(film, params, params.relative_sigma_floor);
     Ok(film
         .pixels

@@ -77,15 +77,18 @@ impl Allocation {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, clap::Args)]
 #[serde(default, deny_unknown_fields)]
 pub struct DtfParams {
-    /// DTF: dependent samples per pixel n in phase 1 (paper: 45..70). The functions here
-    /// read the actual per-pixel counts from the films (they differ only where non-finite
-    /// samples were rejected).
-    #[arg(long = "dtf-n", default_value_t = 50)]
-    pub n: u32,
-    /// DTF: prescribed relative error eps_r (used when neither --spp nor --time is given;
-    /// paper Fig. 2: 0.03).
-    #[arg(long = "dtf-eps", default_value_t = 0.03)]
-    pub eps_r: f32,
+    /// DTF: dependent samples per pixel n in phase 1 (paper: 45..70; default: a quarter of
+    /// an spp budget within 8..50, 16 for a time budget, 50 with --dtf-eps: the paper's
+    /// experiments spent most samples in phase 2). The functions here read the actual
+    /// per-pixel counts from the films (they differ only where non-finite samples were
+    /// rejected).
+    #[arg(long = "dtf-n")]
+    pub n: Option<u32>,
+    /// DTF: render until the prescribed relative error eps_r (the paper's mode; its Fig. 2
+    /// uses 0.03) instead of a sample budget; without it, and without --spp/--time, DTF
+    /// spends the same budget as a plain render of the scene.
+    #[arg(long = "dtf-eps")]
+    pub eps_r: Option<f32>,
     /// DTF: sample categories for N, comma-separated, strictly increasing (paper: "1, 10,
     /// 20, 50, 100").
     #[arg(long = "dtf-categories", value_delimiter = ',', default_values_t = [0u32, 1, 10, 20, 50, 100, 200, 500])]
@@ -157,18 +160,35 @@ impl Default for DtfParams {
 }
 
 impl DtfParams {
+    /// n for a budget: `--dtf-n` if given; else a quarter of an average spp budget within
+    /// 8..50 (the README's tables used 16 at 64-512 spp), 16 for a time budget, the paper's
+    /// 50 for a relative error.
+    pub fn n_for(&self, spp_budget: Option<f64>, relative: bool) -> u32 {
+        match (self.n, spp_budget) {
+            (Some(n), _) => n,
+            (None, Some(spp)) => ((spp / 4.0).round() as u32).clamp(8, 50),
+            (None, None) if relative => 50,
+            (None, None) => 16,
+        }
+    }
+
+    /// eps_r, or an error saying how to give it.
+    pub fn eps(&self) -> Result<f64, String> {
+        self.eps_r
+            .map(|e| e as f64)
+            .ok_or_else(|| "dtf: no relative error eps_r given (--dtf-eps)".to_string())
+    }
+
     /// A clear error for parameters the algorithm cannot use.
     pub fn validate(&self) -> Result<(), String> {
-        if self.n < 2 {
+        if let Some(n) = self.n.filter(|&n| n < 2) {
             return Err(format!(
-                "dtf: n = {}: the dependent phase needs at least 2 samples per pixel to estimate sigma",
-                self.n
+                "dtf: n = {n}: the dependent phase needs at least 2 samples per pixel to estimate sigma"
             ));
         }
-        if !(self.eps_r.is_finite() && self.eps_r > 0.0) {
+        if let Some(e) = self.eps_r.filter(|e| !(e.is_finite() && *e > 0.0)) {
             return Err(format!(
-                "dtf: eps_r = {}: the relative error must be positive",
-                self.eps_r
+                "dtf: eps_r = {e}: the relative error must be positive"
             ));
         }
         if self.categories.is_empty() {

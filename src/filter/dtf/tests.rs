@@ -413,7 +413,7 @@ fn top_up_asks_for_what_the_samples_so_far_need() {
     // 100 samples needs (3 * 0.9 / (0.1 * 3))^2 = 81 in all: nothing more. With
     // sigma = 3 * 1.0 it needs 900, i.e. 800 more, classified up to 1000.
     let params = DtfParams {
-        eps_r: 0.1,
+        eps_r: Some(0.1),
         floor: 0.0,
         ..Default::default()
     };
@@ -711,7 +711,7 @@ mod robust_tests {
         let a = allocate_relative(
             &f,
             &DtfParams {
-                eps_r: 0.1,
+                eps_r: Some(0.1),
                 ..p.clone()
             },
         )
@@ -719,7 +719,7 @@ mod robust_tests {
         let b = allocate_relative(
             &f,
             &DtfParams {
-                eps_r: 0.01,
+                eps_r: Some(0.01),
                 ..p.clone()
             },
         )
