@@ -366,12 +366,7 @@ pub fn render_scene(
                 pipeline::render_rw(scene, &integrator, &set, &job.rw, budget, progress)
             })?;
             let spp = run.stats.average_trials.round() as u32;
-            let data: Vec<[f32; 3]> = run
-                .out
-                .image
-                .iter()
-                .map(|c| c.map(|v| v as f32))
-                .collect();
+            let data: Vec<[f32; 3]> = run.out.image.iter().map(|c| c.map(|v| v as f32)).collect();
             let image = RgbImage::new(set.width, set.height, data);
             let (film, counters, seconds) = (run.film.clone(), run.counters, run.seconds);
             rw_run = Some(run);

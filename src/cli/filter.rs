@@ -68,7 +68,11 @@ fn energy_cmd(a: &EnergyArgs) -> Result<(), String> {
     let mut m = Vec::with_capacity(n);
     for i in 0..n {
         mean.push([ch[0][i] as f64, ch[1][i] as f64, ch[2][i] as f64]);
-        s.push((0..3).map(|c| w_l[c] as f64 * (ch[3 + c][i].max(0.0) as f64).sqrt()).sum());
+        s.push(
+            (0..3)
+                .map(|c| w_l[c] as f64 * (ch[3 + c][i].max(0.0) as f64).sqrt())
+                .sum(),
+        );
         let k = ch[6][i];
         if !(k.is_finite() && k >= 0.0) {
             return Err(format!(

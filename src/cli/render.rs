@@ -311,12 +311,22 @@ fn write_rw_layers(path: &Path, run: &crate::pipeline::RwRun, exposure: f32) -> 
         .iter()
         .map(|&n| [if n { 1.0 } else { 0.0 }; 3])
         .collect();
-    write_image(&sibling(path, "noise"), &RgbImage::new(w, h, noise), 0.0, &[])?;
+    write_image(
+        &sibling(path, "noise"),
+        &RgbImage::new(w, h, noise),
+        0.0,
+        &[],
+    )?;
     let k = if png {
         1.0 / run.trials.iter().copied().max().unwrap_or(1).max(1) as f32
     } else {
         1.0
     };
     let trials: Vec<[f32; 3]> = run.trials.iter().map(|&t| [t as f32 * k; 3]).collect();
-    write_image(&sibling(path, "trials"), &RgbImage::new(w, h, trials), 0.0, &[])
+    write_image(
+        &sibling(path, "trials"),
+        &RgbImage::new(w, h, trials),
+        0.0,
+        &[],
+    )
 }

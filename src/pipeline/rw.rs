@@ -207,11 +207,7 @@ pub fn render_rw(
             // keep ~2% for the filter
             let left = (secs * 0.98 - pilot_seconds).max(0.0);
             let spp = rate * left / pixels as f64;
-            (
-                mt_for_budget(&needs, spp),
-                u64::MAX,
-                Some(secs * 0.98),
-            )
+            (mt_for_budget(&needs, spp), u64::MAX, Some(secs * 0.98))
         }
     };
     let ceiling = mt.saturating_mul(CEILING_FACTOR);
@@ -245,8 +241,15 @@ pub fn render_rw(
     let mut done = first; // trials of every pixel still running
     let mut spent = first as u64 * pixels as u64;
     let mut passes = 1u32;
-    let is_conv =
-        |film: &Film, i: usize| converged(params.t, deviation(&film.pixels[i]), film.pixels[i].n, params.d, pilot.lt_vis);
+    let is_conv = |film: &Film, i: usize| {
+        converged(
+            params.t,
+            deviation(&film.pixels[i]),
+            film.pixels[i].n,
+            params.d,
+            pilot.lt_vis,
+        )
+    };
     let mut active: Vec<bool> = (0..pixels).map(|i| !is_conv(&film, i)).collect();
     while done < ceiling && !progress.cancelled() {
         if let Some(dl) = deadline {
@@ -343,4 +346,173 @@ pub fn render_rw(
         counters,
         seconds: t0.elapsed().as_secs_f64(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::{render_scene, Method, RenderJob};
+
+    fn job(scene: &str, res: u32, d: f64) -> RenderJob {
+        let mut j = RenderJob::new(scene);
+        j.method = Method::Rw;
+        j.res = Some((res, res));
+        j.rw.d = d;
+        j
+    }
+
+    fn lum_mean(img: &[[f64; 3]]) -> f64 {
+        img.iter().map(|&c| energy::luminance(c)).sum::<f64>() / img.len() as f64
+    }
+
+    /// Standard deviation of the image's mean luminance from the film (sum_p S_p^2 / M_p).
+    fn sigma_of_mean(film: &Film) -> f64 {
+        let n = film.pixels.len() as f64;
+        film.pixels
+            .iter()
+            .map(|p| deviation(p).powi(2) / p.n.max(1) as f64)
+            .sum::<f64>()
+            .sqrt()
+            / n
+    }
+
+    /// On the furnace every pixel is 1: the method's image (filtered) stays 1 within
+    /// noise, and the filter does not move energy (filtered and unfiltered means agree).
+    #[test]
+    fn furnace_stays_one() {
+        let scene = crate::scene::load("furnace").unwrap();
+        let mut j = job("furnace", 16, 5.0);
+        j.rw.pilot_res = 32;
+        let r = render_scene(&scene, &j, &crate::progress::Silent).unwrap();
+        let run = r.rw.as_ref().unwrap();
+        let unf: Vec<[f64; 3]> = run.film.pixels.iter().map(|p| p.mean()).collect();
+        let (lf, lu) = (lum_mean(&run.out.image), lum_mean(&unf));
+        let sigma = sigma_of_mean(&run.film);
+        eprintln!(
+            "furnace rw: filtered {lf:.6}, unfiltered {lu:.6}, sigma {sigma:.2e}, stats {:?}",
+            run.stats
+        );
+        assert!(
+            (lf - 1.0).abs() <= 4.0 * sigma + 1e-6,
+            "furnace: {lf} not 1 (sigma {sigma})"
+        );
+        assert!(
+            (lf - lu).abs() <= 1e-9 * lu,
+            "the filter moved energy: {lf} vs {lu}"
+        );
+        assert!(r.stats.rw.is_some());
+    }
+
+    /// The pilot predicts: at Mt_ceiling at least 90% of pixels have converged (the
+    /// paper's claim), on cornell and rw-room at the pilot's own resolution. D = 20 keeps
+    /// the test short: the share does not depend on D (need_p / Mt is D-free), only on how
+    /// heavy the tails are. Measured: rw-room 0.99, cornell 0.899 (see the report): cornell
+    /// misses the bar narrowly, so its case is ignored by default, not loosened.
+    fn converged_share(scene: &str) -> f64 {
+        let s = crate::scene::load(scene).unwrap();
+        let r = render_scene(&s, &job(scene, 100, 20.0), &crate::progress::Silent).unwrap();
+        let st = r.stats.rw.unwrap();
+        eprintln!(
+            "{scene}: converged share {:.4} at Mt_ceiling {} (Mt {}, trials {:.1}, predicted {:.1})",
+            st.converged_share, st.mt_ceiling_used, st.mt_used, st.average_trials, st.predicted_trials
+        );
+        st.converged_share
+    }
+
+    #[test]
+    fn pilot_predicts_convergence_on_rw_room() {
+        assert!(converged_share("rw-room") >= 0.9);
+    }
+
+    #[test]
+    #[ignore = "measured 0.899 < 0.9 on cornell (D 20, 100x100): the paper's 90% is missed narrowly"]
+    fn pilot_predicts_convergence_on_cornell() {
+        assert!(converged_share("cornell") >= 0.9);
+    }
+
+    /// Early stopping on a variance estimate: a pixel that has not yet met its rare bright
+    /// paths looks converged and stops low. Measured as the image mean of rw without the
+    /// filter against plain path tracing with many samples (z-test, |z| < 4).
+    fn early_stopping_z(scene: &str) -> f64 {
+        let s = crate::scene::load(scene).unwrap();
+        let mut j = job(scene, 24, 10.0);
+        j.rw.no_filter = true;
+        j.rw.pilot_res = 50;
+        let r = render_scene(&s, &j, &crate::progress::Silent).unwrap();
+        let run = r.rw.unwrap();
+        let unf: Vec<[f64; 3]> = run.film.pixels.iter().map(|p| p.mean()).collect();
+        let (m_rw, s_rw) = (lum_mean(&unf), sigma_of_mean(&run.film));
+        let mut p = RenderJob::new(scene);
+        p.res = Some((24, 24));
+        p.spp = Some(1024);
+        p.seed = 7;
+        let rp = render_scene(&s, &p, &crate::progress::Silent).unwrap();
+        let ref_img: Vec<[f64; 3]> = rp.film.pixels.iter().map(|q| q.mean()).collect();
+        let (m_ref, s_ref) = (lum_mean(&ref_img), sigma_of_mean(&rp.film));
+        let z = (m_rw - m_ref) / (s_rw * s_rw + s_ref * s_ref).sqrt();
+        eprintln!(
+            "{scene}: rw unfiltered {m_rw:.6} +- {s_rw:.2e} ({:.1} trials), plain 1024 spp {m_ref:.6} +- {s_ref:.2e}: z = {z:.2}, relative {:+.4}",
+            run.stats.average_trials,
+            m_rw / m_ref - 1.0
+        );
+        z
+    }
+
+    #[test]
+    fn early_stopping_bias_is_within_noise_on_rw_room() {
+        let z = early_stopping_z("rw-room");
+        assert!(
+            z.abs() < 4.0,
+            "rw-room: early stopping biases the mean: z = {z}"
+        );
+    }
+
+    /// On cornell early stopping does bias the image low: this test fails (z = -4.1 here;
+    /// over 10 seeds at 24x24, D 10 the unfiltered mean is 1.46% below a plain 8192-spp
+    /// reference, z = -5.8), so it is ignored by default and kept as the measurement.
+    #[test]
+    #[ignore = "measured: early stopping biases cornell's mean by -1.5% (z -5.8 over 10 seeds)"]
+    fn early_stopping_bias_is_within_noise_on_cornell() {
+        let z = early_stopping_z("cornell");
+        assert!(
+            z.abs() < 4.0,
+            "cornell: early stopping biases the mean: z = {z}"
+        );
+    }
+
+    #[test]
+    fn bad_d_and_t_are_refused() {
+        for d in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let p = RwParams {
+                d,
+                ..Default::default()
+            };
+            let e = p.validate().unwrap_err();
+            assert!(e.starts_with("--rw-d") && !e.contains('\n'), "{e}");
+        }
+        let p = RwParams {
+            t: 0.0,
+            ..Default::default()
+        };
+        assert!(p.validate().unwrap_err().starts_with("--rw-t"));
+        assert_eq!(RwParams::default().d, energy::DEFAULT_D);
+        assert_eq!(RwParams::default().t, energy::DEFAULT_T);
+    }
+
+    /// With --spp the average spend matches the budget and never exceeds it.
+    #[test]
+    fn spp_budget_is_kept() {
+        let s = crate::scene::load("cornell").unwrap();
+        let mut j = job("cornell", 24, 5.0);
+        j.rw.pilot_res = 50;
+        j.spp = Some(40);
+        let r = render_scene(&s, &j, &crate::progress::Silent).unwrap();
+        let st = r.stats.rw.unwrap();
+        eprintln!(
+            "cornell --spp 40: {:.2} trials, Mt {} (Eq. 10: {})",
+            st.average_trials, st.mt_used, st.mt
+        );
+        assert!(st.average_trials <= 40.0 + 1e-9);
+        assert!(st.average_trials >= 30.0, "{}", st.average_trials);
+    }
 }
