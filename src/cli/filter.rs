@@ -66,6 +66,7 @@ fn energy_cmd(a: &EnergyArgs) -> Result<(), String> {
     let mut mean = Vec::with_capacity(n);
     let mut s = Vec::with_capacity(n);
     let mut m = Vec::with_capacity(n);
+    #[allow(clippy::needless_range_loop)] // seven planes read at one pixel
     for i in 0..n {
         mean.push([ch[0][i] as f64, ch[1][i] as f64, ch[2][i] as f64]);
         s.push(
