@@ -14,7 +14,9 @@ use crate::integrator::{
     Counters, Gather, Integrator, IntegratorKind, IntegratorSettings, MisHeuristic, Roulette,
 };
 use crate::options::{name, parse_depth, parse_res, parse_seconds, parse_spp, parse_threads};
-use crate::pipeline::{self, Budget, DtfBudget, DtfRun, Progress, RenderSettings};
+use crate::pipeline::{
+    self, Budget, DtfBudget, DtfRun, Progress, RenderSettings, RwBudget, RwParams, RwRun, RwStats,
+};
 use crate::radiosity::RadiositySettings;
 use crate::sampling::{SamplerConfig, SamplerKind};
 use crate::scene::{CameraDesc, Scene};
@@ -30,6 +32,8 @@ pub enum Method {
     Plain,
     /// Dependent-tests driven filtering (Csonka et al.).
     Dtf,
+    /// Rushmeier and Ward: pilot sample, trials until convergence, energy-preserving filter.
+    Rw,
 }
 
 /// Samples per pixel of a plain render when neither the job nor the scene file says.
@@ -108,6 +112,8 @@ pub struct RenderJob {
     pub threads: Option<usize>,
     #[command(flatten)]
     pub dtf: DtfParams,
+    #[command(flatten)]
+    pub rw: RwParams,
 }
 
 impl Default for RenderJob {
@@ -180,6 +186,8 @@ impl RenderJob {
         if self.method == Method::Dtf {
             self.dtf.validate()?;
         }
+        // (checked whatever the method, so a bad --rw-d is never silently ignored)
+        self.rw.validate()?;
         Ok(())
     }
 }
@@ -219,6 +227,8 @@ pub struct RenderStats {
     pub mean_rgb: [f64; 3],
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dtf: Option<DtfStats>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rw: Option<RwStats>,
 }
 
 /// DTF's share of the statistics.
@@ -243,6 +253,8 @@ pub struct Rendered {
     pub stats: RenderStats,
     /// DTF's phases and maps (`--dtf-layers`).
     pub dtf: Option<DtfRun>,
+    /// RW's trials, filter output and maps (`--rw-layers`).
+    pub rw: Option<RwRun>,
     /// Things the user should know (the scene's warnings, capped threads, a black image).
     pub warnings: Vec<String>,
 }
@@ -298,6 +310,7 @@ pub fn render_scene(
         .install(|| Integrator::prepare(scene, set.integrator, set.spectral.bands(), progress))?;
     let prepare_seconds = t_prep.elapsed().as_secs_f64();
 
+    let mut rw_run: Option<RwRun> = None;
     let (film, image, counters, seconds, spp, interrupted, dtf_stats, dtf_run): (
         Film,
         RgbImage,
@@ -345,6 +358,31 @@ pub fn render_scene(
                 false,
                 Some(stats),
                 Some(run),
+            )
+        }
+        Method::Rw => {
+            let budget = match (job.time, job.spp) {
+                (Some(t), _) => RwBudget::Time(t),
+                (None, Some(n)) => RwBudget::Spp(n as f64),
+                (None, None) => RwBudget::Convergence,
+            };
+            let run = pool.install(|| {
+                pipeline::render_rw(scene, &integrator, &set, &job.rw, budget, progress)
+            })?;
+            let spp = run.stats.average_trials.round() as u32;
+            let data: Vec<[f32; 3]> = run.out.image.iter().map(|c| c.map(|v| v as f32)).collect();
+            let image = RgbImage::new(set.width, set.height, data);
+            let (film, counters, seconds) = (run.film.clone(), run.counters, run.seconds);
+            rw_run = Some(run);
+            (
+                film,
+                image,
+                counters,
+                seconds,
+                spp,
+                progress.cancelled(),
+                None,
+                None,
             )
         }
         Method::Plain => {
@@ -423,12 +461,14 @@ pub fn render_scene(
         interrupted,
         mean_rgb: image.mean(),
         dtf: dtf_stats,
+        rw: rw_run.as_ref().map(|r| r.stats.clone()),
     };
     Ok(Rendered {
         image,
         film,
         stats,
         dtf: dtf_run,
+        rw: rw_run,
         warnings,
     })
 }

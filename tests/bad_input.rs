@@ -707,4 +707,59 @@ fn an_interrupted_render_writes_what_it_has() {
         img.mean().iter().all(|&m| m > 0.05),
         "the image is not rendered"
     );
+
+/// `--method rw` with a D that is not a positive number, and `kalos filter energy` on an
+/// EXR without the `--aovs` layers (or on no EXR at all): one-line errors.
+#[test]
+fn rw_bad_d_and_filter_energy_without_layers() {
+    let d = temp_dir("rw");
+    for v in ["0", "-1", "nan"] {
+        let (code, err) = render(&d, "cornell", &["--method", "rw", "--rw-d", v]);
+        assert_one_line_error(&format!("--rw-d {v}"), code, &err, 1, &["--rw-d"]);
+    }
+    let plain = d.join("plain.exr");
+    let (code, err) = render(&d, "cornell", &["-o", plain.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let out = d.join("f.exr");
+    let (code, _, err) = kalos(&[
+        "filter",
+        "energy",
+        plain.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_one_line_error(
+        "filter energy without layers",
+        code,
+        &err,
+        1,
+        &["plain.exr", "--aovs"],
+    );
+    let (code, _, err) = kalos(&[
+        "filter",
+        "energy",
+        plain.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--rw-d",
+        "-2",
+    ]);
+    assert_one_line_error("filter energy --rw-d -2", code, &err, 1, &["--rw-d"]);
+    // with the layers it works
+    let aov = d.join("aov.exr");
+    let (code, err) = render(
+        &d,
+        "cornell",
+        &["--spp", "8", "--aovs", "-o", aov.to_str().unwrap()],
+    );
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = kalos(&[
+        "filter",
+        "energy",
+        aov.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.is_file());
 }

@@ -2,6 +2,7 @@
 //! by the library. Every error is one line naming the file, line or option at fault.
 
 pub mod experiment;
+pub mod filter;
 pub mod progress;
 pub mod radiosity;
 pub mod render;
@@ -59,6 +60,9 @@ pub enum Command {
     /// Solve the scene's radiosity (the preprocess of Rushmeier and Ward's path tracer)
     /// and write the meshed solution as a vertex-coloured PLY.
     Radiosity(radiosity::RadiosityArgs),
+    /// Filters on images written before (`energy`: Rushmeier and Ward's).
+    #[command(subcommand)]
+    Filter(filter::FilterCommand),
     /// Print triangles, materials, emitters, bounds and load/BVH times of a scene.
     Info {
         /// Built-in scene name, .obj or .toml file.
@@ -137,6 +141,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             aovs,
         } => merge(&parts, &output, aovs),
         Command::Radiosity(args) => radiosity::run(args),
+        Command::Filter(cmd) => filter::run(cmd),
         Command::Info { scene, json } => {
             let s = crate::scene::load(&scene)?;
             for w in &s.warnings {

@@ -34,6 +34,10 @@ pub struct RenderArgs {
     /// filtered, combined, N and M maps).
     #[arg(long)]
     pub dtf_layers: bool,
+    /// RW: write the unfiltered and filtered images, the noise-pixel mask and the map of
+    /// trials per pixel beside the output (the paper's figure 4 as files).
+    #[arg(long)]
+    pub rw_layers: bool,
 }
 
 impl RenderArgs {
@@ -160,6 +164,9 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     if let (true, Some(run)) = (a.dtf_layers, &r.dtf) {
         write_dtf_layers(&a.output, run, a.exposure)?;
     }
+    if let (true, Some(run)) = (a.rw_layers, &r.rw) {
+        write_rw_layers(&a.output, run, a.exposure)?;
+    }
     let stats = &r.stats;
     if let Some(p) = &a.stats {
         let json = serde_json::to_string_pretty(stats).map_err(|e| e.to_string())?;
@@ -278,4 +285,48 @@ fn write_dtf_layers(
         &[],
     )?;
     Ok(())
+}
+
+/// RW's layers: `-unfiltered`, `-filtered`, `-noise` (1 where a pixel had not converged)
+/// and `-trials` (trials per pixel; normalised to its maximum in PNG output).
+fn write_rw_layers(path: &Path, run: &crate::pipeline::RwRun, exposure: f32) -> Result<(), String> {
+    let (w, h) = (run.film.width, run.film.height);
+    let f32s = |v: &[[f64; 3]]| v.iter().map(|c| c.map(|x| x as f32)).collect::<Vec<_>>();
+    write_image(
+        &sibling(path, "unfiltered"),
+        &RgbImage::new(w, h, run.film.mean_rgb()),
+        exposure,
+        &[],
+    )?;
+    write_image(
+        &sibling(path, "filtered"),
+        &RgbImage::new(w, h, f32s(&run.out.image)),
+        exposure,
+        &[],
+    )?;
+    let png = crate::image_io::format_of(path)? == crate::image_io::Format::Png;
+    let noise: Vec<[f32; 3]> = run
+        .out
+        .noise
+        .iter()
+        .map(|&n| [if n { 1.0 } else { 0.0 }; 3])
+        .collect();
+    write_image(
+        &sibling(path, "noise"),
+        &RgbImage::new(w, h, noise),
+        0.0,
+        &[],
+    )?;
+    let k = if png {
+        1.0 / run.trials.iter().copied().max().unwrap_or(1).max(1) as f32
+    } else {
+        1.0
+    };
+    let trials: Vec<[f32; 3]> = run.trials.iter().map(|&t| [t as f32 * k; 3]).collect();
+    write_image(
+        &sibling(path, "trials"),
+        &RgbImage::new(w, h, trials),
+        0.0,
+        &[],
+    )
 }

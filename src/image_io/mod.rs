@@ -355,6 +355,46 @@ fn read_pfm(bytes: &[u8]) -> Result<RgbImage, String> {
     Ok(RgbImage::new(w, h, data))
 }
 
+/// Read the named channels of an EXR's first layer (e.g. "variance.R", "count.Y"), each
+/// as a row-major plane, with the image's size. A channel that is missing is an error
+/// naming it.
+pub fn read_exr_channels(path: &Path, names: &[&str]) -> Result<(u32, u32, Vec<Vec<f32>>), String> {
+    use exr::prelude::*;
+    if format_of(path)? != Format::Exr {
+        return Err(format!("{}: not an EXR file", path.display()));
+    }
+    let bytes = crate::input::read_bytes(path)?;
+    let limit = max_pixels()?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| format!("{}: cannot read image: {e}", path.display()))?;
+    let size = image.layer_data.size;
+    let n = size.width() as u64 * size.height() as u64;
+    if n > limit {
+        return Err(format!(
+            "{}: the image is {}x{}: more pixels than the input limit allows ({limit})",
+            path.display(),
+            size.width(),
+            size.height()
+        ));
+    }
+    let chans = &image.layer_data.channel_data.list;
+    let mut out = Vec::with_capacity(names.len());
+    for name in names {
+        let c = chans
+            .iter()
+            .find(|c| c.name.to_string() == *name)
+            .ok_or_else(|| format!("{}: no channel {name}", path.display()))?;
+        out.push(c.sample_data.values_as_f32().collect::<Vec<f32>>());
+    }
+    Ok((size.width() as u32, size.height() as u32, out))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

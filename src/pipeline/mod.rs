@@ -5,7 +5,9 @@
 
 pub mod dtf;
 pub mod render;
+pub mod rw;
 
 pub use crate::progress::{Progress, Silent};
 pub use dtf::{render_dtf, DtfBudget, DtfRun};
 pub use render::{render, render_pass, Budget, Counts, Pass, RenderOutput, RenderSettings};
+pub use rw::{render_rw, RwBudget, RwParams, RwRun, RwStats};
