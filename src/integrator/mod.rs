@@ -198,6 +198,14 @@ impl Integrator {
                     .into(),
             );
         }
+        if set.kind == IntegratorKind::Bdpt && set.roulette.mode == RrMode::Off && set.max_depth < 0
+        {
+            return Err(format!(
+                "--integrator bdpt with --rr off and --max-depth -1: subpaths run to {HARD_MAX_DEPTH} \
+                 vertices and each sample costs the cube of that; give --max-depth D or a roulette \
+                 (--rr classic|spectral)"
+            ));
+        }
         if set.gather_depth == 0 {
             return Err("--gather-depth: must be at least 1 (the first diffuse bounce)".into());
         }

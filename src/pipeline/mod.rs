@@ -5,6 +5,7 @@
 
 pub mod dtf;
 pub mod render;
+pub mod strategies;
 
 pub use crate::progress::{Progress, Silent};
 pub use dtf::{render_dtf, DtfBudget, DtfRun};
