@@ -232,8 +232,17 @@ impl Integrator {
             bdpt: bdpt::BdptOptions {
                 heuristic: set.mis,
                 strategies: bdpt::Strategies::All,
+                light_per_pixel: false,
             },
         })
+    }
+
+    /// The estimator for DTF's dependent phase: BDPT draws each pixel's light subpath
+    /// from its own stream (`bdpt::BdptOptions::light_per_pixel`); the others unchanged.
+    pub fn for_dependent_phase(&self) -> Integrator {
+        let mut i = self.clone();
+        i.bdpt.light_per_pixel = true;
+        i
     }
 
     /// Whether this estimator sends splats (the film then keeps splat and batch sums).
