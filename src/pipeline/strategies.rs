@@ -163,11 +163,14 @@ struct Args<'a> {
 /// Per pixel, per strategy: [weighted, unweighted] RGB sums.
 type Sums = Vec<[[f64; 3]; 2]>;
 
+/// A row's output: each pixel's own sums, and its splats (pixel, strategy slot, sample).
+type RowOut = (Vec<Sums>, Vec<(usize, usize, StrategySample)>);
+
 fn pass<const N: usize>(a: &Args) -> Vec<Sums> {
     let set = a.set;
     let (w, h) = (set.width as usize, set.height as usize);
     let cam = Camera::new(set.camera, set.width, set.height);
-    let rows: Vec<(Vec<Sums>, Vec<(usize, usize, StrategySample)>)> = (0..h)
+    let rows: Vec<RowOut> = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut own: Vec<Sums> = vec![vec![[[0.0; 3]; 2]; a.slots]; w];
@@ -176,7 +179,7 @@ fn pass<const N: usize>(a: &Args) -> Vec<Sums> {
                 return (own, splats);
             }
             let mut c = Counters::default();
-            for x in 0..w {
+            for (x, own_x) in own.iter_mut().enumerate() {
                 let pixel = y * w + x;
                 for k in 0..a.spp {
                     let mut st = SampleStream::new(&set.sampler, 0, pixel as u32, a.first + k);
@@ -190,7 +193,7 @@ fn pass<const N: usize>(a: &Args) -> Vec<Sums> {
                                 splats.push((py as usize * w + px as usize, j, ss));
                             }
                         } else {
-                            add(&mut own[x][j], &ss);
+                            add(&mut own_x[j], &ss);
                         }
                     };
                     bdpt::sample_pixel_with::<N>(
@@ -228,9 +231,9 @@ fn pass<const N: usize>(a: &Args) -> Vec<Sums> {
 
 #[inline]
 fn add(acc: &mut [[f64; 3]; 2], ss: &StrategySample) {
-    for c in 0..3 {
-        acc[0][c] += ss.weighted[c] as f64;
-        acc[1][c] += ss.unweighted[c] as f64;
+    for (c, (&wv, &uv)) in ss.weighted.iter().zip(&ss.unweighted).enumerate() {
+        acc[0][c] += wv as f64;
+        acc[1][c] += uv as f64;
     }
 }
 
@@ -275,9 +278,9 @@ mod tests {
         let mut worst = 0.0f64;
         for i in 0..120 {
             let v = r.film.value(i);
-            for c in 0..3 {
+            for (c, &vc) in v.iter().enumerate() {
                 let sum: f64 = one.iter().map(|im| im.weighted[i][c] as f64).sum();
-                worst = worst.max((sum - v[c]).abs() / v[c].abs().max(1e-3));
+                worst = worst.max((sum - vc).abs() / vc.abs().max(1e-3));
             }
         }
         assert!(
