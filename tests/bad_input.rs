@@ -707,6 +707,7 @@ fn an_interrupted_render_writes_what_it_has() {
         img.mean().iter().all(|&m| m > 0.05),
         "the image is not rendered"
     );
+}
 
 /// `--method rw` with a D that is not a positive number, and `kalos filter energy` on an
 /// EXR without the `--aovs` layers (or on no EXR at all): one-line errors.

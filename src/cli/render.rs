@@ -38,6 +38,11 @@ pub struct RenderArgs {
     /// trials per pixel beside the output (the paper's figure 4 as files).
     #[arg(long)]
     pub rw_layers: bool,
+    /// BDPT: also write one image per strategy (s, t) of the path lengths up to 4 (or
+    /// --max-depth) beside the output, MIS-weighted (`out-s1-t2.exr`) and unweighted
+    /// (`out-s1-t2-unweighted.exr`): which strategy carries which light.
+    #[arg(long)]
+    pub bdpt_strategies: bool,
 }
 
 impl RenderArgs {
@@ -140,6 +145,16 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     }
     let job = a.job();
     job.validate()?;
+    if a.bdpt_strategies {
+        if job.integrator != crate::integrator::IntegratorKind::Bdpt {
+            return Err(
+                "--bdpt-strategies: the strategy images are BDPT's; add --integrator bdpt".into(),
+            );
+        }
+        if job.method != Method::Plain || is_film_path(&a.output) || job.time.is_some() {
+            return Err("--bdpt-strategies: needs a plain render to an image with --spp (not --method dtf, --time or a .kfilm output)".into());
+        }
+    }
     install_interrupt_handler();
     let progress = CliProgress::new(a.quiet);
     let r = crate::render::render(&job, &progress)?;
@@ -166,6 +181,9 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     }
     if let (true, Some(run)) = (a.rw_layers, &r.rw) {
         write_rw_layers(&a.output, run, a.exposure)?;
+    }
+    if a.bdpt_strategies {
+        write_bdpt_strategies(&a, &job, &progress)?;
     }
     let stats = &r.stats;
     if let Some(p) = &a.stats {
@@ -329,4 +347,36 @@ fn write_rw_layers(path: &Path, run: &crate::pipeline::RwRun, exposure: f32) -> 
         0.0,
         &[],
     )
+}
+
+/// BDPT's strategy images beside the output (`pipeline::strategies`).
+fn write_bdpt_strategies(
+    a: &RenderArgs,
+    job: &crate::render::RenderJob,
+    progress: &dyn crate::progress::Progress,
+) -> Result<(), String> {
+    use crate::pipeline::strategies::{render_strategies, DEFAULT_MAX_LENGTH};
+    let scene = crate::scene::load(&job.scene)?;
+    let images = render_strategies(&scene, job, DEFAULT_MAX_LENGTH, progress)?;
+    let set = job.settings(&scene);
+    for im in &images {
+        for (suffix, data) in [("", &im.weighted), ("-unweighted", &im.unweighted)] {
+            let img = RgbImage::new(set.width, set.height, data.clone());
+            write_image(
+                &sibling(&a.output, &format!("{}{suffix}", im.name())),
+                &img,
+                a.exposure,
+                &[],
+            )?;
+        }
+    }
+    if !a.quiet {
+        eprintln!(
+            "kalos: {} strategy images ({} weighted + unweighted) beside {}",
+            2 * images.len(),
+            images.len(),
+            a.output.display()
+        );
+    }
+    Ok(())
 }

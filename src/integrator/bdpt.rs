@@ -101,6 +101,12 @@ pub enum Strategies {
 pub struct BdptOptions {
     pub heuristic: MisHeuristic,
     pub strategies: Strategies,
+    /// Draw the light subpath from a stream of its own per pixel (`SampleStream::
+    /// decorrelated` with the pixel), even when the sampler is dependent: DTF's dependent
+    /// phase over BDPT shares only the camera subpath (and next-event points) between
+    /// pixels. With the whole path shared, every pixel splats the same n light subpaths to
+    /// the same n x (path length) pixels, and C_d's light-tracing share is n bright dots.
+    pub light_per_pixel: bool,
 }
 
 /// One strategy's contribution, for the debug layers (pbrt's visualizestrategies).
@@ -777,7 +783,12 @@ pub fn sample_pixel_with<const N: usize>(
     let mut camp: Vec<Vertex<N>> = Vec::with_capacity(8);
     let mut light: Vec<Vertex<N>> = Vec::with_capacity(8);
     camera_subpath(scene, cam, raster, max_segments + 1, s, &rr, c, &mut camp);
-    light_subpath(scene, max_segments, s, &rr, c, &mut light);
+    if opts.light_per_pixel {
+        let mut ls = s.decorrelated(((y as u64) << 32) | x as u64);
+        light_subpath(scene, max_segments, &mut ls, &rr, c, &mut light);
+    } else {
+        light_subpath(scene, max_segments, s, &rr, c, &mut light);
+    }
 
     let mut l = Spectrum::<N>::ZERO;
     for t in 1..=camp.len() {

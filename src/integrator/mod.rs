@@ -198,6 +198,14 @@ impl Integrator {
                     .into(),
             );
         }
+        if set.kind == IntegratorKind::Bdpt && set.roulette.mode == RrMode::Off && set.max_depth < 0
+        {
+            return Err(format!(
+                "--integrator bdpt with --rr off and --max-depth -1: subpaths run to {HARD_MAX_DEPTH} \
+                 vertices and each sample costs the cube of that; give --max-depth D or a roulette \
+                 (--rr classic|spectral)"
+            ));
+        }
         if set.gather_depth == 0 {
             return Err("--gather-depth: must be at least 1 (the first diffuse bounce)".into());
         }
@@ -224,8 +232,17 @@ impl Integrator {
             bdpt: bdpt::BdptOptions {
                 heuristic: set.mis,
                 strategies: bdpt::Strategies::All,
+                light_per_pixel: false,
             },
         })
+    }
+
+    /// The estimator for DTF's dependent phase: BDPT draws each pixel's light subpath
+    /// from its own stream (`bdpt::BdptOptions::light_per_pixel`); the others unchanged.
+    pub fn for_dependent_phase(&self) -> Integrator {
+        let mut i = self.clone();
+        i.bdpt.light_per_pixel = true;
+        i
     }
 
     /// Whether this estimator sends splats (the film then keeps splat and batch sums).

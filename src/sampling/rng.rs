@@ -91,6 +91,20 @@ impl SampleStream {
         }
     }
 
+    /// A stream of the same sample index made independent of this one by `salt` (e.g. a
+    /// pixel, so that one part of a dependent sample is drawn per pixel after all).
+    #[inline]
+    pub fn decorrelated(&self, salt: u64) -> SampleStream {
+        let key = mix64(self.key ^ mix64(salt ^ 0x5a17_ed00_0000_0001));
+        SampleStream {
+            kind: self.kind,
+            key,
+            base: mix64(key ^ (self.index as u64).wrapping_mul(0xd1b5_4a32_d192_ed03)),
+            index: self.index,
+            dim: 0,
+        }
+    }
+
     /// Jump to a fixed dimension (so that each bounce uses the same dimensions).
     #[inline]
     pub fn set_dimension(&mut self, dim: u32) {

@@ -50,12 +50,11 @@ pub const N_HARD_MAX: u32 = 1 << 24;
 /// `relative_floor` (F) also floors sigma at F ||C_d|| (eps_r mode's
 /// `DtfParams::relative_sigma_floor`; budget weights pass 0).
 pub fn robust_stats(dep: &Film, params: &DtfParams, relative_floor: f32) -> Vec<(f64, f64)> {
-    let raw: Vec<(f64, f64)> = dep
-        .pixels
-        .par_iter()
-        .map(|s| {
-            let sg = sigma(s);
-            let c = color_norm(s.mean());
+    let raw: Vec<(f64, f64)> = (0..dep.pixels.len())
+        .into_par_iter()
+        .map(|i| {
+            let sg = film_sigma(dep, i);
+            let c = color_norm(film_value(dep, i));
             (
                 if sg.is_finite() { sg.max(0.0) } else { 0.0 },
                 if c.is_finite() { c } else { 0.0 },

@@ -69,6 +69,50 @@ pub fn sigma(s: &PixelStats) -> f64 {
     s.variance().iter().map(|v| v.max(0.0).sqrt()).sum()
 }
 
+/// C[p] as the film holds it: the mean of pixel `i`'s samples plus, for an estimator that
+/// splats (BDPT's light tracing, t = 1), its splat image (`Film::value`). A film without
+/// splats gives exactly `PixelStats::mean`.
+#[inline]
+pub fn film_value(film: &crate::film::Film, i: usize) -> [f64; 3] {
+    match &film.splats {
+        None => film.pixels[i].mean(),
+        Some(_) => film.value(i),
+    }
+}
+
+/// sigma[p] read from the film: [`sigma`] of the pixel's samples, or, with splats, the
+/// same sum of per-channel deviations from the batch-means variance of the value
+/// (`Film::variance_of_value` x n): one camera sample no longer holds all of a pixel's
+/// estimate, and in the dependent phase the splats of every pixel come from the same
+/// light subpaths, so only whole batches of samples are independent.
+pub fn film_sigma(film: &crate::film::Film, i: usize) -> f64 {
+    match &film.splats {
+        None => sigma(&film.pixels[i]),
+        Some(_) => {
+            let n = film.pixels[i].n;
+            if n < 2 {
+                return 0.0;
+            }
+            film.variance_of_value(i)
+                .iter()
+                .map(|v| (v.max(0.0) * n as f64).sqrt())
+                .sum()
+        }
+    }
+}
+
+/// Variance of C[p] (per channel): the mean's sigma^2 / N, or with splats the batch-means
+/// variance (`Film::variance_of_value`); infinite with fewer than two samples.
+pub fn film_variance_of_value(film: &crate::film::Film, i: usize) -> [f64; 3] {
+    if film.pixels[i].n < 2 {
+        return [f64::INFINITY; 3];
+    }
+    match &film.splats {
+        None => film.pixels[i].variance_of_mean(),
+        Some(_) => film.variance_of_value(i),
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Display
 // ---------------------------------------------------------------------------------------

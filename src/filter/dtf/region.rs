@@ -121,27 +121,27 @@ impl Dtf {
             params: params.clone(),
             width: dep.width as usize,
             height: dep.height as usize,
-            cd: dep.pixels.iter().map(|s| s.mean()).collect(),
-            sigma: dep.pixels.par_iter().map(sigma).collect(),
+            cd: (0..dep.pixels.len()).map(|i| film_value(dep, i)).collect(),
+            sigma: (0..dep.pixels.len())
+                .into_par_iter()
+                .map(|i| film_sigma(dep, i))
+                .collect(),
             n_dep: dep.pixels.iter().map(|s| s.n).collect(),
             alloc: alloc.to_vec(),
             // A pixel without samples has no C_i (whatever its stored mean says).
-            ci: indep
-                .pixels
-                .iter()
-                .map(|s| if s.n > 0 { s.mean() } else { [0.0; 3] })
-                .collect(),
-            n_ind: indep.pixels.iter().map(|s| s.n).collect(),
-            ci_var: indep
-                .pixels
-                .iter()
-                .map(|s| {
-                    if s.n > 1 {
-                        s.variance_of_mean()
+            ci: (0..indep.pixels.len())
+                .map(|i| {
+                    if indep.pixels[i].n > 0 {
+                        film_value(indep, i)
                     } else {
-                        [f64::INFINITY; 3]
+                        [0.0; 3]
                     }
                 })
+                .collect(),
+            n_ind: indep.pixels.iter().map(|s| s.n).collect(),
+            ci_var: (0..indep.pixels.len())
+                .into_par_iter()
+                .map(|i| film_variance_of_value(indep, i))
                 .collect(),
         })
     }

@@ -1,0 +1,303 @@
+//! BDPT's strategy images (pbrt-v4's `visualizestrategies`; Veach's thesis, figure 10.3):
+//! one image per connection strategy (s, t) of the path lengths up to a bound, each the
+//! contribution C*_{s,t} of that strategy alone, MIS-weighted (w_{s,t} C*_{s,t}: what it
+//! adds to the render) and unweighted (C*_{s,t}: an estimate of the whole light of that
+//! path length, by that strategy alone).
+//!
+//! A pass over the pixels calls `bdpt::sample_pixel_with` with a callback. Camera-side
+//! strategies (t >= 2) add to their own pixel, light tracing (t = 1) to the pixel its
+//! splat lands in; every image is the sum divided by the samples per pixel (one light
+//! subpath per camera sample, as in the render). Rows run in parallel, each keeping its own
+//! sums and its list of splats; rows are reduced in row order, so the images are the same
+//! bits for any thread count. The random streams are the render's (stream 0, sample indices
+//! `first..first + spp`), so the weighted images of every path length sum to the render.
+
+use crate::integrator::bdpt::{self, BdptOptions, StrategySample};
+use crate::integrator::{Counters, IntegratorKind};
+use crate::progress::Progress;
+use crate::render::RenderJob;
+use crate::sampling::SampleStream;
+use crate::scene::{Camera, Scene};
+use crate::spectrum::SpectralMode;
+use rayon::prelude::*;
+
+/// The default bound on the path length (segments, Mitsuba's depth) of the images.
+pub const DEFAULT_MAX_LENGTH: u32 = 4;
+
+/// The two images of one strategy (s, t): path length s + t - 1 segments.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StrategyImage {
+    pub s: u32,
+    pub t: u32,
+    /// Linear RGB, row-major: w_{s,t} C*_{s,t}.
+    pub weighted: Vec<[f32; 3]>,
+    /// Linear RGB, row-major: C*_{s,t}.
+    pub unweighted: Vec<[f32; 3]>,
+}
+
+impl StrategyImage {
+    /// File name part, pbrt's: `s1-t2`.
+    pub fn name(&self) -> String {
+        format!("s{}-t{}", self.s, self.t)
+    }
+}
+
+/// Every strategy of path lengths 1..=max_length (s + t - 1 segments, s + t >= 2; (1, 1)
+/// does not exist), in order of length, then s.
+pub fn strategy_list(max_length: u32) -> Vec<(u32, u32)> {
+    let mut v = Vec::new();
+    for len in 1..=max_length {
+        for s in 0..=len + 1 {
+            let t = len + 1 - s;
+            if t >= 1 && !(s == 1 && t == 1) {
+                v.push((s, t));
+            }
+        }
+    }
+    v
+}
+
+/// Index of (s, t) in `strategy_list(max_length)`, if its length is within the bound.
+fn slot(s: u32, t: u32, max_length: u32) -> Option<usize> {
+    let len = (s + t).checked_sub(1)?;
+    if len == 0 || len > max_length || t == 0 || (s == 1 && t == 1) {
+        return None;
+    }
+    // length l has the l + 1 strategies s = 0..=l, but length 1 only (0, 2)
+    let before: u32 = (1..len).map(|l| if l == 1 { 1 } else { l + 1 }).sum();
+    let within = if len == 1 { 0 } else { s };
+    Some((before + within) as usize)
+}
+
+/// Render the strategy images of `job` (an `--integrator bdpt` job, plain method) for the
+/// path lengths up to `max_length` (and the job's --max-depth, if smaller).
+pub fn render_strategies(
+    scene: &Scene,
+    job: &RenderJob,
+    max_length: u32,
+    progress: &dyn Progress,
+) -> Result<Vec<StrategyImage>, String> {
+    if job.integrator != IntegratorKind::Bdpt {
+        return Err(format!(
+            "--bdpt-strategies: the strategy images are BDPT's; add --integrator bdpt (not {})",
+            crate::options::name(&job.integrator)
+        ));
+    }
+    job.validate()?;
+    let set = job.settings(scene);
+    crate::film::check_resolution(set.width, set.height)?;
+    let spp = match (job.spp, job.time) {
+        (Some(n), _) => n,
+        (None, None) => scene.defaults.spp.unwrap_or(crate::render::DEFAULT_SPP),
+        (None, Some(_)) => {
+            return Err("--bdpt-strategies: give --spp (the strategy images are a fixed number of samples, not --time)".into())
+        }
+    };
+    // Checks the integrator settings as the render does (e.g. --rr off with no depth).
+    crate::integrator::Integrator::prepare(
+        scene,
+        set.integrator,
+        set.spectral.bands(),
+        &crate::progress::Silent,
+    )?;
+    let max_len = match set.integrator.max_depth {
+        d if d >= 0 => max_length.min(d as u32),
+        _ => max_length,
+    };
+    let (pool, _) = crate::render::thread_pool(job.threads)?;
+    let opts = BdptOptions {
+        heuristic: set.integrator.mis,
+        ..Default::default()
+    };
+    let list = strategy_list(max_len);
+    let args = Args {
+        scene,
+        set: &set,
+        opts: &opts,
+        first: job.first_sample,
+        spp,
+        max_len,
+        slots: list.len(),
+        progress,
+    };
+    progress.begin("samples", set.width as u64 * set.height as u64 * spp as u64);
+    let sums = pool.install(|| match set.spectral {
+        SpectralMode::Rgb => pass::<3>(&args),
+        SpectralMode::Bands8 => pass::<8>(&args),
+        SpectralMode::Bands16 => pass::<16>(&args),
+    });
+    progress.finish();
+    if progress.cancelled() {
+        return Err("--bdpt-strategies: interrupted, no strategy images written".into());
+    }
+    let k = 1.0 / spp as f64;
+    Ok(list
+        .iter()
+        .enumerate()
+        .map(|(j, &(s, t))| StrategyImage {
+            s,
+            t,
+            weighted: sums
+                .iter()
+                .map(|p| p[j][0].map(|v| (v * k) as f32))
+                .collect(),
+            unweighted: sums
+                .iter()
+                .map(|p| p[j][1].map(|v| (v * k) as f32))
+                .collect(),
+        })
+        .collect())
+}
+
+struct Args<'a> {
+    scene: &'a Scene,
+    set: &'a crate::pipeline::RenderSettings,
+    opts: &'a BdptOptions,
+    first: u32,
+    spp: u32,
+    max_len: u32,
+    slots: usize,
+    progress: &'a dyn Progress,
+}
+
+/// Per pixel, per strategy: [weighted, unweighted] RGB sums.
+type Sums = Vec<[[f64; 3]; 2]>;
+
+/// A row's output: each pixel's own sums, and its splats (pixel, strategy slot, sample).
+type RowOut = (Vec<Sums>, Vec<(usize, usize, StrategySample)>);
+
+fn pass<const N: usize>(a: &Args) -> Vec<Sums> {
+    let set = a.set;
+    let (w, h) = (set.width as usize, set.height as usize);
+    let cam = Camera::new(set.camera, set.width, set.height);
+    let rows: Vec<RowOut> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let mut own: Vec<Sums> = vec![vec![[[0.0; 3]; 2]; a.slots]; w];
+            let mut splats: Vec<(usize, usize, StrategySample)> = Vec::new();
+            if a.progress.cancelled() {
+                return (own, splats);
+            }
+            let mut c = Counters::default();
+            for (x, own_x) in own.iter_mut().enumerate() {
+                let pixel = y * w + x;
+                for k in 0..a.spp {
+                    let mut st = SampleStream::new(&set.sampler, 0, pixel as u32, a.first + k);
+                    let mut cb = |ss: StrategySample| {
+                        let Some(j) = slot(ss.s, ss.t, a.max_len) else {
+                            return;
+                        };
+                        if ss.t == 1 {
+                            let (px, py) = (ss.raster.x, ss.raster.y);
+                            if px >= 0.0 && py >= 0.0 && (px as usize) < w && (py as usize) < h {
+                                splats.push((py as usize * w + px as usize, j, ss));
+                            }
+                        } else {
+                            add(&mut own_x[j], &ss);
+                        }
+                    };
+                    bdpt::sample_pixel_with::<N>(
+                        a.scene,
+                        &cam,
+                        x as u32,
+                        y as u32,
+                        &mut st,
+                        &set.integrator,
+                        a.opts,
+                        &mut c,
+                        &mut |_, _| {},
+                        Some(&mut cb),
+                    );
+                }
+            }
+            a.progress.advance(w as u64 * a.spp as u64);
+            (own, splats)
+        })
+        .collect();
+    // Reduce in row order: the same additions in the same order on any thread count.
+    let mut sums: Vec<Sums> = Vec::with_capacity(w * h);
+    let mut all_splats = Vec::new();
+    for (own, splats) in rows {
+        sums.extend(own);
+        all_splats.push(splats);
+    }
+    for splats in all_splats {
+        for (p, j, ss) in splats {
+            add(&mut sums[p][j], &ss);
+        }
+    }
+    sums
+}
+
+#[inline]
+fn add(acc: &mut [[f64; 3]; 2], ss: &StrategySample) {
+    for (c, (&wv, &uv)) in ss.weighted.iter().zip(&ss.unweighted).enumerate() {
+        acc[0][c] += wv as f64;
+        acc[1][c] += uv as f64;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::Silent;
+
+    #[test]
+    fn slots_follow_the_list() {
+        let list = strategy_list(5);
+        for (j, &(s, t)) in list.iter().enumerate() {
+            assert_eq!(slot(s, t, 5), Some(j), "({s}, {t})");
+        }
+        assert_eq!(slot(1, 1, 5), None);
+        assert_eq!(slot(3, 4, 5), None); // length 6
+        assert_eq!(list.len(), 1 + 3 + 4 + 5 + 6);
+    }
+
+    fn job() -> RenderJob {
+        let mut j = RenderJob::new("cornell");
+        j.integrator = IntegratorKind::Bdpt;
+        j.res = Some((12, 10));
+        j.spp = Some(4);
+        j.max_depth = Some(3);
+        j
+    }
+
+    /// The weighted images of every length sum to the render's image (same streams, all
+    /// lengths within --max-depth), and the result does not depend on the thread count.
+    #[test]
+    fn weighted_strategies_sum_to_the_render_on_any_thread_count() {
+        let scene = crate::scene::load("cornell").unwrap();
+        let mut j = job();
+        j.threads = Some(1);
+        let one = render_strategies(&scene, &j, 8, &Silent).unwrap();
+        j.threads = Some(3);
+        let three = render_strategies(&scene, &j, 8, &Silent).unwrap();
+        assert_eq!(one, three);
+        assert_eq!(one.len(), strategy_list(3).len());
+        let r = crate::render::render_scene(&scene, &j, &Silent).unwrap();
+        let mut worst = 0.0f64;
+        for i in 0..120 {
+            let v = r.film.value(i);
+            for (c, &vc) in v.iter().enumerate() {
+                let sum: f64 = one.iter().map(|im| im.weighted[i][c] as f64).sum();
+                worst = worst.max((sum - vc).abs() / vc.abs().max(1e-3));
+            }
+        }
+        assert!(
+            worst < 1e-4,
+            "weighted strategies vs render: relative {worst}"
+        );
+        // (0, 2) is the emitters seen directly: the light's pixels only, same both ways.
+        let direct = one.iter().find(|im| (im.s, im.t) == (0, 2)).unwrap();
+        assert_eq!(direct.weighted, direct.unweighted);
+    }
+
+    #[test]
+    fn refused_without_bdpt() {
+        let scene = crate::scene::load("cornell").unwrap();
+        let mut j = job();
+        j.integrator = IntegratorKind::Path;
+        let e = render_strategies(&scene, &j, 4, &Silent).unwrap_err();
+        assert!(e.contains("--integrator bdpt"), "{e}");
+    }
+}
