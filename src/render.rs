@@ -306,6 +306,26 @@ pub fn render_scene(
     let (pool, thread_warning) = thread_pool(job.threads)?;
     let mut warnings: Vec<String> = thread_warning.into_iter().collect();
     let t_prep = std::time::Instant::now();
+    // Say what a large render will cost before it starts.
+    let pixels = set.width as u64 * set.height as u64;
+    let planned = match (job.method, job.time, job.spp) {
+        (_, Some(_), _) => None,
+        (_, None, Some(n)) => Some(n as u64 * pixels),
+        (Method::Dtf, None, None) if job.dtf.eps_r.is_some() => None,
+        (_, None, None) => Some(scene.defaults.spp.unwrap_or(DEFAULT_SPP) as u64 * pixels),
+    };
+    if let Some(total) = planned.filter(|&t| t >= LARGE_RENDER_SAMPLES) {
+        progress.message(&format!(
+            "{total} samples planned ({pixels} pixels): about {:.1} hours at 1 M samples/s; \
+             Ctrl-C writes what is done",
+            total as f64 / 1e6 / 3600.0
+        ));
+    }
+    if let (Method::Dtf, None, None, Some(e)) = (job.method, job.time, job.spp, job.dtf.eps_r) {
+        progress.message(&format!(
+            "dtf with eps_r = {e}: the work depends on phase 1 and is known after it"
+        ));
+    }
     let integrator = pool
         .install(|| Integrator::prepare(scene, set.integrator, set.spectral.bands(), progress))?;
     let prepare_seconds = t_prep.elapsed().as_secs_f64();
