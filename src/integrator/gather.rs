@@ -182,28 +182,9 @@ pub fn radiance<const N: usize>(
 
         // Next-event estimation (beta_d is black at non-delta vertices).
         if !bsdf.is_delta() {
-            if let Some(ls) = scene.lights.sample_position(u_sel, u_light) {
-                let d = ls.p - hit.p;
-                let dist2 = d.length_squared();
-                let dist = dist2.sqrt();
-                let wi = d / dist;
-                let cos_l = -wi.dot(ls.n);
-                let wi_l = frame.to_local(wi);
-                if cos_l > 0.0 && wi_l.z > 0.0 && wi.dot(ng) > 0.0 {
-                    let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z;
-                    if !f.is_black() {
-                        let o = offset_origin(hit.p, ng, wi);
-                        let to = ls.p - o;
-                        c.rays += 1;
-                        if !scene.bvh.occluded(&Ray::new(o, to), 1.0 - 1e-4) {
-                            let pdf_light = ls.pdf_area * dist2 / cos_l;
-                            let w = power_heuristic(pdf_light, sel.pdf(&bsdf, wo_l, wi_l));
-                            let le = ls.emitted(&scene.lights, cos_l);
-                            l += beta * f * Spectrum::from_rgb(le) * (w / pdf_light);
-                        }
-                    }
-                }
-            }
+            l += super::path::next_event::<N>(
+                scene, hit.p, ng, &frame, wo_l, &bsdf, &sel, u_sel, u_light, &beta, c,
+            );
         }
 
         let step = sel.sample::<N>(&bsdf, wo_l, u_lobe, u_bsdf, u_rr);

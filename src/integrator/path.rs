@@ -91,28 +91,9 @@ pub fn radiance<const N: usize>(
 
         // Next-event estimation.
         if !bsdf.is_delta() {
-            if let Some(ls) = scene.lights.sample_position(u_sel, u_light) {
-                let d = ls.p - hit.p;
-                let dist2 = d.length_squared();
-                let dist = dist2.sqrt();
-                let wi = d / dist;
-                let cos_l = -wi.dot(ls.n);
-                let wi_l = frame.to_local(wi);
-                if cos_l > 0.0 && wi_l.z > 0.0 && wi.dot(ng) > 0.0 {
-                    let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z;
-                    if !f.is_black() {
-                        let o = offset_origin(hit.p, ng, wi);
-                        let to = ls.p - o;
-                        c.rays += 1;
-                        if !scene.bvh.occluded(&Ray::new(o, to), 1.0 - 1e-4) {
-                            let pdf_light = ls.pdf_area * dist2 / cos_l;
-                            let w = power_heuristic(pdf_light, sel.pdf(&bsdf, wo_l, wi_l));
-                            let le = ls.emitted(&scene.lights, cos_l);
-                            l += beta * f * Spectrum::from_rgb(le) * (w / pdf_light);
-                        }
-                    }
-                }
-            }
+            l += next_event::<N>(
+                scene, hit.p, ng, &frame, wo_l, &bsdf, &sel, u_sel, u_light, &beta, c,
+            );
         }
 
         // Roulette and continuation (integrator/rr.rs).
@@ -157,4 +138,51 @@ pub fn sample_pixel<const N: usize>(
 ) -> [f32; 3] {
     let ray = super::camera_ray(cam, x, y, s);
     radiance::<N>(scene, ray, s, set, &Spectrum::ZERO, c).to_rgb()
+}
+
+/// Next-event estimation at a non-delta vertex: a point sampled on the lights, its
+/// visibility, MIS-weighted (power heuristic) against the roulette's selection density.
+/// Returns beta f Le w / p_light (zero if the point is not seen). Shared by the path
+/// tracer and the radiosity gather.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn next_event<const N: usize>(
+    scene: &Scene,
+    p: crate::math::Vec3,
+    ng: crate::math::Vec3,
+    frame: &Frame,
+    wo_l: crate::math::Vec3,
+    bsdf: &crate::material::Bsdf,
+    sel: &super::rr::Selection,
+    u_sel: f32,
+    u_light: glam::Vec2,
+    beta: &Spectrum<N>,
+    c: &mut Counters,
+) -> Spectrum<N> {
+    let Some(ls) = scene.lights.sample_position(u_sel, u_light) else {
+        return Spectrum::ZERO;
+    };
+    let d = ls.p - p;
+    let dist2 = d.length_squared();
+    let dist = dist2.sqrt();
+    let wi = d / dist;
+    let cos_l = -wi.dot(ls.n);
+    let wi_l = frame.to_local(wi);
+    if !(cos_l > 0.0 && wi_l.z > 0.0 && wi.dot(ng) > 0.0) {
+        return Spectrum::ZERO;
+    }
+    let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z;
+    if f.is_black() {
+        return Spectrum::ZERO;
+    }
+    let o = offset_origin(p, ng, wi);
+    let to = ls.p - o;
+    c.rays += 1;
+    if scene.bvh.occluded(&Ray::new(o, to), 1.0 - 1e-4) {
+        return Spectrum::ZERO;
+    }
+    let pdf_light = ls.pdf_area * dist2 / cos_l;
+    let w = power_heuristic(pdf_light, sel.pdf(bsdf, wo_l, wi_l));
+    let le = ls.emitted(&scene.lights, cos_l);
+    *beta * f * Spectrum::from_rgb(le) * (w / pdf_light)
 }
