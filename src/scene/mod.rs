@@ -42,6 +42,73 @@ pub struct MaterialDesc {
     /// What kalos renders differently from what the file asks (one warning per material
     /// when the scene is built).
     pub notes: Vec<String>,
+    /// A surface model beyond MTL's vocabulary (Mitsuba's BSDF plugins); None: the MTL
+    /// fields above describe the surface. `kd`/`map_kd` stay the diffuse reflectance.
+    pub model: Option<SurfaceModel>,
+}
+
+/// Surface models of Mitsuba 3's BSDF plugins (parameters in RGB; roughness is GGX alpha,
+/// isotropic; alpha 0 is the smooth interface).
+#[derive(Clone, Debug, PartialEq)]
+pub enum SurfaceModel {
+    /// `conductor` / `roughconductor`: complex index of refraction eta + i k per channel,
+    /// relative to the outside medium, times a specular reflectance.
+    Conductor {
+        eta: [f32; 3],
+        k: [f32; 3],
+        specular: [f32; 3],
+        alpha: f32,
+    },
+    /// `plastic` / `roughplastic`: a diffuse base (`kd`, `map_kd`) under a dielectric coat of
+    /// relative index `eta`; `nonlinear` is Mitsuba's parameter of that name.
+    Plastic {
+        eta: f32,
+        specular: [f32; 3],
+        alpha: f32,
+        nonlinear: bool,
+    },
+    /// `dielectric` / `roughdielectric`: an interface of relative index `eta` (inside over
+    /// outside).
+    Dielectric { eta: f32, alpha: f32 },
+    /// `thindielectric`: a thin slab of index `eta` (no refraction of the direction).
+    ThinDielectric { eta: f32 },
+}
+
+impl SurfaceModel {
+    /// Mitsuba's plugin name, for messages.
+    pub fn plugin(&self) -> &'static str {
+        match self {
+            SurfaceModel::Conductor { alpha, .. } if *alpha > 0.0 => "roughconductor",
+            SurfaceModel::Conductor { .. } => "conductor",
+            SurfaceModel::Plastic { alpha, .. } if *alpha > 0.0 => "roughplastic",
+            SurfaceModel::Plastic { .. } => "plastic",
+            SurfaceModel::Dielectric { alpha, .. } if *alpha > 0.0 => "roughdielectric",
+            SurfaceModel::Dielectric { .. } => "dielectric",
+            SurfaceModel::ThinDielectric { .. } => "thindielectric",
+        }
+    }
+}
+
+/// Light from infinitely far away (Mitsuba's `constant` and `envmap` emitters).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentDesc {
+    /// Constant radiance (linear RGB), or the scale of `map`.
+    pub radiance: [f32; 3],
+    /// An equirectangular image (EXR, HDR or PNG) in Mitsuba's convention.
+    pub map: Option<PathBuf>,
+    /// Rotation from the map's frame to world space (Mitsuba's `to_world`, columns).
+    pub to_world: glam::Mat3,
+    /// Where it was defined (`file:line`), for messages.
+    pub source: Option<String>,
+}
+
+/// An isotropic point light (Mitsuba's `point` emitter).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointLightDesc {
+    pub position: Vec3,
+    /// Radiant intensity (W/sr, linear RGB).
+    pub intensity: [f32; 3],
+    pub source: Option<String>,
 }
 
 impl MaterialDesc {
@@ -59,6 +126,7 @@ impl MaterialDesc {
             emit_one_minus_albedo: false,
             source: None,
             notes: Vec::new(),
+            model: None,
         }
     }
 }
@@ -82,6 +150,9 @@ pub struct SceneDesc {
     pub materials: Vec<MaterialDesc>,
     pub camera: Option<CameraDesc>,
     pub defaults: RenderDefaults,
+    /// Light from far away (at most one).
+    pub environment: Option<EnvironmentDesc>,
+    pub point_lights: Vec<PointLightDesc>,
     /// Zero-area (or non-finite) faces skipped while loading.
     pub skipped_degenerate: usize,
     pub warnings: Vec<String>,
@@ -176,6 +247,22 @@ impl Scene {
             if let Some(w) = w.filter(|w| !material_warnings.contains(w)) {
                 material_warnings.push(w);
             }
+            if let Some(model) = &m.model {
+                // Not yet shaded by kalos: say so once per material, render the MTL fields.
+                let w = format!(
+                    "material {}{}: bsdf '{}' is not supported yet, rendered as {}",
+                    m.name,
+                    m.source
+                        .as_deref()
+                        .map(|s| format!(" ({s})"))
+                        .unwrap_or_default(),
+                    model.plugin(),
+                    describe_mtl(m.illum, kd, ks)
+                );
+                if !material_warnings.contains(&w) {
+                    material_warnings.push(w);
+                }
+            }
             let bsdf = Bsdf::from_mtl(kd, ks, m.ns, m.ni, m.illum);
             let (emission, emission_table) = if m.emit_one_minus_albedo {
                 let t = AlbedoTable::new(&bsdf);
@@ -199,6 +286,23 @@ impl Scene {
         let camera = desc.camera.unwrap_or_else(|| default_camera(&bounds));
         let mut warnings = desc.warnings;
         warnings.extend(material_warnings);
+        if let Some(e) = &desc.environment {
+            warnings.push(format!(
+                "scene {}: environment light{} is not supported yet, ignored",
+                desc.name,
+                e.source
+                    .as_deref()
+                    .map(|s| format!(" ({s})"))
+                    .unwrap_or_default()
+            ));
+        }
+        if !desc.point_lights.is_empty() {
+            warnings.push(format!(
+                "scene {}: {} point light(s) not supported yet, ignored",
+                desc.name,
+                desc.point_lights.len()
+            ));
+        }
         if lights.is_empty() {
             warnings.push(format!(
                 "scene {} has no emitter: the image will be black",
@@ -252,6 +356,17 @@ impl Scene {
     #[inline]
     pub fn material_of(&self, prim: u32) -> &Material {
         &self.materials[self.tri_material[prim as usize] as usize]
+    }
+}
+
+/// How an MTL-described surface renders, for messages.
+fn describe_mtl(illum: u8, kd: [f32; 3], ks: [f32; 3]) -> &'static str {
+    match illum {
+        5 => "a mirror",
+        7 => "smooth glass",
+        _ if ks != [0.0; 3] => "diffuse plus Phong",
+        _ if kd != [0.0; 3] => "diffuse",
+        _ => "black",
     }
 }
 
