@@ -145,3 +145,72 @@ fn trace<const N: usize>(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrator::{Integrator, IntegratorSettings, SplatSink};
+    use crate::sampling::{SampleStream, SamplerConfig};
+    use crate::scene::Camera;
+
+    /// Sample by sample, the transport (L - f) plus the light seen directly (f) is the
+    /// plain estimate, and f is the whole of a sample that sees only an emitter: on
+    /// `caustic` (glass and mirror: f has glass branches) and `rw-room` (mirror boxes).
+    #[test]
+    fn transport_plus_visible_is_the_plain_sample() {
+        for name in ["caustic", "rw-room", "cornell"] {
+            let scene = crate::scene::load(name).unwrap();
+            let (w, h) = (12, 12);
+            let cam = Camera::new(scene.camera, w, h);
+            let it = Integrator::prepare(
+                &scene,
+                IntegratorSettings::default(),
+                3,
+                &crate::progress::Silent,
+            )
+            .unwrap();
+            let parts = [
+                it.clone(),
+                it.with_visible(Visible::Exclude),
+                it.with_visible(Visible::Only),
+            ];
+            let cfg = SamplerConfig::default();
+            let mut sink = SplatSink::new(w, h);
+            let mut c = Counters::default();
+            let mut nonzero_f = 0;
+            for y in 0..h {
+                for x in 0..w {
+                    for k in 0..4 {
+                        let s0 = SampleStream::new(&cfg, 0, y * w + x, k);
+                        let v: Vec<[f32; 3]> = parts
+                            .iter()
+                            .map(|i| {
+                                i.sample::<3>(
+                                    &scene,
+                                    &cam,
+                                    x,
+                                    y,
+                                    &mut s0.clone(),
+                                    &mut sink,
+                                    &mut c,
+                                )
+                            })
+                            .collect();
+                        for ch in 0..3 {
+                            let sum = v[1][ch] + v[2][ch];
+                            assert!(
+                                (sum - v[0][ch]).abs() <= 1e-4 * (1.0 + v[0][ch].abs()),
+                                "{name} ({x}, {y}) #{k}: {:?} + {:?} != {:?}",
+                                v[1],
+                                v[2],
+                                v[0]
+                            );
+                        }
+                        nonzero_f += (v[2] != [0.0; 3]) as u32;
+                    }
+                }
+            }
+            assert!(nonzero_f > 0, "{name}: the camera sees no emitter");
+        }
+    }
+}
