@@ -100,6 +100,12 @@ pub struct DtfParams {
     /// (paper: 0.01).
     #[arg(long = "dtf-df0", default_value_t = 0.01, allow_hyphen_values = true)]
     pub df0_min: f32,
+    /// DTF: display C = (C_d n + C_i N)/(n + N) with C_d as phase 1 gave it (the
+    /// paper's). By default C_d is first rescaled per channel so that its image sum,
+    /// weighted by N, matches phase 2's: all pixels share phase 1's random numbers, so its
+    /// error is shared by the whole image and otherwise sets the image's brightness.
+    #[arg(long = "dtf-paper-display")]
+    pub paper_display: bool,
     /// DTF: distance kernel d: pyramid (the paper's) or gaussian.
     #[arg(long = "dtf-kernel", value_enum, default_value_t = Kernel::Pyramid)]
     pub kernel: Kernel,
@@ -138,6 +144,11 @@ pub struct DtfParams {
     /// --dtf-topup of phase 2's budget again (0 = the paper's single allocation).
     #[arg(long = "dtf-rounds", default_value_t = 2)]
     pub top_up_rounds: u32,
+    /// DTF: top-up rounds decide from each pixel's own phase-2 statistics (biased: a
+    /// pixel whose samples came out low looks converged and stays low). By default a
+    /// pixel's top-up reads its phase-1 samples and its 8 neighbours' phase-2 samples.
+    #[arg(long = "dtf-topup-own")]
+    pub top_up_own: bool,
     /// DTF budget modes: share of phase 2's samples held back for the top-up round.
     #[arg(long = "dtf-topup", default_value_t = 0.25)]
     pub top_up_share: f32,

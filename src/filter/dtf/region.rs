@@ -77,12 +77,88 @@ struct Scratch {
 type PixelOut = (u32, u32, f32, [f32; 3], [f32; 3]);
 
 /// The tables DTF reads, taken from the two films and the allocation.
+/// Half-width of the window over which C_d's brightness is matched to phase 2's.
+const SCALE_RADIUS: usize = 8;
+
+/// g_c[p] = sum_q a_q C_i[q]_c / sum_q a_q C_d[q]_c over the pixels q phase 2 sampled in
+/// the (2 R + 1)^2 window around p, with a_q = n_q / (n_q + N_q) the weight C_d gets in
+/// the display (1 where either sum is zero or not finite). Phase 2's pixels are
+/// independent, so its window sums are nearly free of the error that phase 1's shared
+/// random numbers leave in every pixel at once; g C_d keeps C_d's detail and takes phase
+/// 2's local brightness where the display leans on C_d. Local, not one factor for the
+/// image: the shared error differs between the walls and an emitter seen directly (whose
+/// C_d is exact). As N grows, g C_d's weight vanishes as C_d's did.
+fn shared_error_scale(
+    cd: &[[f64; 3]],
+    dep: &Film,
+    indep: &Film,
+    w: usize,
+    h: usize,
+) -> Vec<[f64; 3]> {
+    // summed-area tables of a C_i and a C_d, per channel
+    let (sw, sh) = (w + 1, h + 1);
+    let mut num = vec![[0.0f64; 3]; sw * sh];
+    let mut den = vec![[0.0f64; 3]; sw * sh];
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let px = &indep.pixels[i];
+            let (mut vn, mut vd) = ([0.0; 3], [0.0; 3]);
+            if px.n > 0 {
+                let ci = film_value(indep, i);
+                let n = dep.pixels[i].n as f64;
+                let k = n / (n + px.n as f64);
+                for c in 0..3 {
+                    vn[c] = k * ci[c];
+                    vd[c] = k * cd[i][c];
+                }
+            }
+            let (j, up, left, diag) = (
+                (y + 1) * sw + x + 1,
+                y * sw + x + 1,
+                (y + 1) * sw + x,
+                y * sw + x,
+            );
+            for c in 0..3 {
+                num[j][c] = vn[c] + num[up][c] + num[left][c] - num[diag][c];
+                den[j][c] = vd[c] + den[up][c] + den[left][c] - den[diag][c];
+            }
+        }
+    }
+    let r = SCALE_RADIUS;
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let (x0, y0, x1, y1) = (
+                x.saturating_sub(r),
+                y.saturating_sub(r),
+                (x + r + 1).min(w),
+                (y + r + 1).min(h),
+            );
+            let mut g = [1.0; 3];
+            for c in 0..3 {
+                let box_sum = |t: &[[f64; 3]]| {
+                    t[y1 * sw + x1][c] - t[y0 * sw + x1][c] - t[y1 * sw + x0][c]
+                        + t[y0 * sw + x0][c]
+                };
+                let q = box_sum(&num) / box_sum(&den);
+                if q.is_finite() && q > 0.0 {
+                    g[c] = q;
+                }
+            }
+            g
+        })
+        .collect()
+}
+
 pub struct Dtf {
     params: DtfParams,
     width: usize,
     height: usize,
     /// C_d per pixel.
     cd: Vec<[f64; 3]>,
+    /// g per pixel and channel: C_d's display scale (empty with `paper_display`).
+    cd_scale: Vec<[f64; 3]>,
     /// sigma per pixel (phase 1).
     sigma: Vec<f64>,
     /// n per pixel (phase 1 count).
@@ -117,11 +193,18 @@ impl Dtf {
                 dep.pixels.len()
             ));
         }
+        let cd: Vec<[f64; 3]> = (0..dep.pixels.len()).map(|i| film_value(dep, i)).collect();
+        let cd_scale = if params.paper_display {
+            Vec::new()
+        } else {
+            shared_error_scale(&cd, dep, indep, dep.width as usize, dep.height as usize)
+        };
         Ok(Dtf {
             params: params.clone(),
             width: dep.width as usize,
             height: dep.height as usize,
-            cd: (0..dep.pixels.len()).map(|i| film_value(dep, i)).collect(),
+            cd,
+            cd_scale,
             sigma: (0..dep.pixels.len())
                 .into_par_iter()
                 .map(|i| film_sigma(dep, i))
@@ -343,7 +426,10 @@ impl Dtf {
                     }
                 }
                 // C = (C_d n + C_i N) / (n + N).
-                let disp = combine(self.cd[p], self.n_dep[p], c, self.n_ind[p]);
+                let g = self.cd_scale.get(p).copied().unwrap_or([1.0; 3]);
+                let cd = self.cd[p];
+                let cd = [cd[0] * g[0], cd[1] * g[1], cd[2] * g[2]];
+                let disp = combine(cd, self.n_dep[p], c, self.n_ind[p]);
                 let f32s = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32];
                 (m, s.w.len() as u32, s.w[0] as f32, f32s(c), f32s(disp))
             })

@@ -248,9 +248,24 @@ fn constant_image_passes_unchanged() {
             }
             // And it did form regions: interior pixels reach m_max.
             assert_eq!(out.m[3 * 9 + 4], 4, "{kernel:?} {clamp:?}");
-            // Combined: (C_d * 50 + C_i * 20) / 70.
+            // Combined: C_d rescaled to phase 2's brightness (g = 0.35 / 0.3 in every
+            // window), so (g C_d * 50 + C_i * 20) / 70 = C_i.
+            assert!((out.combined.data[10][0] as f64 - 0.35).abs() < 1e-6);
+            // The paper's display: (C_d * 50 + C_i * 20) / 70.
+            let paper = DtfParams {
+                paper_display: true,
+                ..params.clone()
+            };
+            let dtf = setup(
+                9,
+                7,
+                |_, _| px([0.3, 0.5, 0.7], [0.2, 0.1, 0.3], 50),
+                |_, _| px([0.35, 0.45, 0.75], [0.2, 0.1, 0.3], 20),
+                |_, _| 20,
+                &paper,
+            );
             let want = (0.3 * 50.0 + 0.35 * 20.0) / 70.0;
-            assert!((out.combined.data[10][0] as f64 - want).abs() < 1e-6);
+            assert!((dtf.run().combined.data[10][0] as f64 - want).abs() < 1e-6);
         }
     }
 }
@@ -534,7 +549,8 @@ fn degenerate_pixels_are_not_filtered() {
     assert!(r.m > 1 && r.weights.iter().all(|q| (q.0, q.1) != (2, 1)));
     let out = dtf.run();
     assert_eq!(out.filtered.get(2, 1), [0.0; 3]);
-    assert_eq!(out.combined.get(2, 1), [1.0; 3]);
+    // displayed: C_d at phase 2's brightness (its neighbours' C_i = 2 C_d)
+    assert_eq!(out.combined.get(2, 1), [2.0; 3]);
     assert!(out
         .combined
         .data
@@ -551,7 +567,11 @@ fn combination_formula_hand_computed() {
     // Through the filter on a 1x1 image (no neighbours: filtered = C_i).
     let d = film(1, 1, |_, _| px([1.0, 2.0, 3.0], grey(0.5), 50));
     let i = film(1, 1, |_, _| px([2.0, 2.0, 0.0], grey(0.5), 150));
-    let out = dtf_filter(&d, &i, &[100], &DtfParams::default()).unwrap();
+    let paper = DtfParams {
+        paper_display: true,
+        ..DtfParams::default()
+    };
+    let out = dtf_filter(&d, &i, &[100], &paper).unwrap();
     assert_eq!(out.filtered.data[0], [2.0, 2.0, 0.0]);
     assert_eq!(out.combined.data[0], [1.75, 2.0, 0.75]);
     assert_eq!((out.m[0], out.region[0], out.n[0]), (1, 1, 100));
