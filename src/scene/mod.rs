@@ -7,8 +7,10 @@ pub mod camera;
 pub mod hit;
 pub mod mtl;
 pub mod obj;
+pub mod ply;
 pub mod texture;
 pub mod toml_scene;
+pub mod xml;
 
 pub use camera::{Camera, CameraDesc};
 pub use hit::SurfaceHit;
@@ -387,7 +389,8 @@ pub fn default_camera(b: &Bounds3) -> CameraDesc {
     }
 }
 
-/// Load a scene named on the command line: a built-in name, an `.obj` or a `.toml` file.
+/// Load a scene named on the command line: a built-in name, an `.obj`, a `.toml` or a
+/// Mitsuba `.xml` file.
 pub fn load(spec: &str) -> Result<Scene, String> {
     let t0 = Instant::now();
     let desc = load_desc(spec)?;
@@ -419,8 +422,9 @@ pub fn load_desc(spec: &str) -> Result<SceneDesc, String> {
             Ok(desc)
         }
         Some("toml") => toml_scene::load(path),
+        Some("xml") => xml::load(path),
         _ => Err(format!(
-            "{spec}: not a built-in scene ({}) nor an .obj or .toml file",
+            "{spec}: not a built-in scene ({}) nor an .obj, .toml or Mitsuba .xml file",
             builtin::NAMES.join(", ")
         )),
     }
