@@ -146,12 +146,8 @@ impl Reader {
         depth: usize,
     ) -> Result<Vec<El>, String> {
         let text = crate::input::clean_text(text);
-        let opts = roxmltree::ParsingOptions {
-            allow_dtd: true,
-            ..Default::default()
-        };
-        let doc = roxmltree::Document::parse_with_options(&text, opts)
-            .map_err(|e| xml_error(file, &e))?;
+        // no DTDs (Mitsuba files have none; entity expansion is not worth the risk)
+        let doc = roxmltree::Document::parse(&text).map_err(|e| xml_error(file, &e))?;
         let root = doc.root_element();
         let at = |n: &roxmltree::Node| format!("{file}:{}", doc.text_pos_at(n.range().start).row);
         if root.tag_name().name() != "scene" {
