@@ -446,7 +446,7 @@ fn special_files_are_refused_without_reading() {
 
 const XML: &str = r#"<scene version="3.0.0">
 <default name="r" value="0.5"/>
-<bsdf type="roughplastic" id="p"><float name="alpha" value="$r"/>
+<bsdf type="roughplastic" id="p"><float name="alpha" value="$r"/><string name="distribution" value="ggx"/>
 <rgb name="diffuse_reflectance" value="0.2, 0.3, 0.4"/></bsdf>
 <bsdf type="twosided" id="d"><bsdf type="diffuse">
 <spectrum name="reflectance" value="400:0.1, 700:0.9"/></bsdf></bsdf>

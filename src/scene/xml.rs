@@ -2408,8 +2408,31 @@ pub fn load(path: &Path) -> Result<SceneDesc, String> {
     )
 }
 
+/// A message on one line: control characters (a newline in an attribute written as
+/// `&#10;`, one quoted by the XML parser) are escaped.
+fn one_line(s: String) -> String {
+    if !s.chars().any(char::is_control) {
+        return s;
+    }
+    s.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_debug().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
+}
+
 /// Parse Mitsuba XML text; relative file names resolve against `dir`.
 pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
+    let mut d = parse_inner(text, file, dir).map_err(one_line)?;
+    d.warnings = d.warnings.into_iter().map(one_line).collect();
+    Ok(d)
+}
+
+fn parse_inner(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
     let mut reader = Reader {
         defaults: HashMap::new(),
         warnings: Vec::new(),
