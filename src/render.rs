@@ -59,7 +59,8 @@ pub struct RenderJob {
     /// Samples per pixel (default 64, or the scene file's).
     #[arg(long, conflicts_with = "time", value_parser = parse_spp)]
     pub spp: Option<u32>,
-    /// Render for this many seconds (whole passes) instead of a fixed spp.
+    /// Render for this many seconds instead of a fixed spp: the estimator's preprocess
+    /// (radiosity solve, L~ walk) included, then whole passes.
     #[arg(long, value_parser = parse_seconds)]
     pub time: Option<f64>,
     /// Resolution WxH (default: the scene's, else 256x256).
@@ -74,6 +75,11 @@ pub struct RenderJob {
     /// Estimator.
     #[arg(long, value_enum, default_value_t = IntegratorKind::Path)]
     pub integrator: IntegratorKind,
+    /// A filter on the finished image: energy (Rushmeier and Ward's energy-preserving
+    /// filter, with --rw-d and --rw-t; Lt_vis from the image's mean, S_p and M from the
+    /// film). `--method rw` ends with it already.
+    #[arg(long = "filter", value_enum)]
+    pub post_filter: Option<PostFilter>,
     /// BDPT: weighting of the strategies: balance (Veach's) or power (exponent 2).
     #[arg(long, value_enum, default_value_t = MisHeuristic::Balance)]
     pub bdpt_mis: MisHeuristic,
@@ -163,6 +169,7 @@ impl RenderJob {
                 gather_depth: self.gather_depth,
                 radiosity: self.radiosity,
                 mis: self.bdpt_mis,
+                visible: crate::integrator::Visible::All,
             },
         }
     }
@@ -174,6 +181,9 @@ impl RenderJob {
         }
         if self.threads == Some(0) {
             return Err("--threads: must be at least 1".into());
+        }
+        if self.post_filter == Some(PostFilter::Energy) && self.method == Method::Rw {
+            return Err("--filter energy: --method rw ends with the energy filter already".into());
         }
         if self.spp.is_some() && self.time.is_some() {
             return Err("--spp and --time: give one budget, not both".into());
@@ -329,6 +339,15 @@ pub fn render_scene(
     let integrator = pool
         .install(|| Integrator::prepare(scene, set.integrator, set.spectral.bands(), progress))?;
     let prepare_seconds = t_prep.elapsed().as_secs_f64();
+    // --time covers the preprocess too (equal-time comparisons count it).
+    let time_left = job.time.map(|t| {
+        if prepare_seconds >= t {
+            warnings.push(format!(
+                "--time {t}: the preprocess took {prepare_seconds:.2} s of it; rendering one pass"
+            ));
+        }
+        (t - prepare_seconds).max(0.0)
+    });
 
     let mut rw_run: Option<RwRun> = None;
     let (film, image, counters, seconds, spp, interrupted, dtf_stats, dtf_run): (
@@ -343,7 +362,7 @@ pub fn render_scene(
     ) = match job.method {
         Method::Dtf => {
             let params = &job.dtf;
-            let budget = match (job.time, job.spp) {
+            let budget = match (time_left, job.spp) {
                 (Some(t), _) => DtfBudget::Time(t),
                 (None, Some(n)) => DtfBudget::Spp(n as f64),
                 (None, None) if params.eps_r.is_some() => DtfBudget::RelativeError,
@@ -381,7 +400,7 @@ pub fn render_scene(
             )
         }
         Method::Rw => {
-            let budget = match (job.time, job.spp) {
+            let budget = match (time_left, job.spp) {
                 (Some(t), _) => RwBudget::Time(t),
                 (None, Some(n)) => RwBudget::Spp(n as f64),
                 (None, None) => RwBudget::Convergence,
@@ -406,7 +425,7 @@ pub fn render_scene(
             )
         }
         Method::Plain => {
-            let budget = match (job.time, job.spp) {
+            let budget = match (time_left, job.spp) {
                 (Some(t), _) => Budget::Time(t),
                 (None, Some(n)) => Budget::Spp(n),
                 (None, None) => Budget::Spp(scene.defaults.spp.unwrap_or(DEFAULT_SPP)),
@@ -427,6 +446,10 @@ pub fn render_scene(
             )
         }
     };
+    let mut image = image;
+    if let Some(PostFilter::Energy) = job.post_filter {
+        image = energy_post_filter(&film, &image, &job.rw)?;
+    }
     let rej = film.rejected;
     if rej.total() > 0 {
         warnings.push(format!(
@@ -552,6 +575,36 @@ mod tests {
         assert!(serde_json::from_str::<RenderJob>(r#"{"sppp": 3}"#).is_err());
     }
 
+    /// `--filter energy` after a plain render moves no energy (sum of luminance kept to
+    /// 1e-9), changes a noisy image, and is refused after `--method rw`.
+    #[test]
+    fn energy_post_filter_keeps_energy() {
+        let scene = crate::scene::load("cornell").unwrap();
+        let mut j = RenderJob::new("cornell");
+        j.res = Some((24, 24));
+        j.spp = Some(8);
+        let plain = render_scene(&scene, &j, &crate::progress::Silent).unwrap();
+        j.post_filter = Some(PostFilter::Energy);
+        let f = render_scene(&scene, &j, &crate::progress::Silent).unwrap();
+        let lum = |i: &RgbImage| {
+            i.data
+                .iter()
+                .map(|c| crate::filter::energy::luminance(c.map(|v| v as f64)))
+                .sum::<f64>()
+        };
+        let (a, b) = (lum(&plain.image), lum(&f.image));
+        assert!((a - b).abs() <= 1e-6 * a, "energy moved: {a} vs {b}");
+        assert_ne!(
+            plain.image.data, f.image.data,
+            "8 spp on cornell has noise pixels"
+        );
+        j.method = Method::Rw;
+        let Err(e) = render_scene(&scene, &j, &crate::progress::Silent) else {
+            panic!("--filter energy with --method rw was accepted")
+        };
+        assert!(e.contains("--filter energy"), "{e}");
+    }
+
     #[test]
     fn key_ignores_the_sample_range_only() {
         let mut a = RenderJob::new("cornell");
@@ -563,4 +616,29 @@ mod tests {
         b.seed = 1;
         assert_ne!(a.key(), b.key());
     }
+}
+/// A filter on a finished image (`--filter`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum PostFilter {
+    /// Rushmeier and Ward's energy-preserving filter.
+    Energy,
+}
+
+/// The energy-preserving filter on a finished image: each pixel's value from the image,
+/// its deviation S_p and trial count M from the film, Lt_vis from the image's mean.
+fn energy_post_filter(film: &Film, image: &RgbImage, rw: &RwParams) -> Result<RgbImage, String> {
+    use crate::filter::energy;
+    let mean: Vec<[f64; 3]> = image.data.iter().map(|c| c.map(|v| v as f64)).collect();
+    let s: Vec<f64> = film.pixels.iter().map(energy::deviation).collect();
+    let m: Vec<u32> = film.pixels.iter().map(|p| p.n).collect();
+    let p = energy::EnergyParams {
+        d: rw.d,
+        lt_vis: energy::lt_vis(energy::l_ave(&mean)),
+        t: rw.t,
+    };
+    let out = energy::energy_filter(image.width, image.height, &mean, &s, &m, &p)
+        .map_err(|e| format!("--filter energy: {e}"))?;
+    let data = out.image.iter().map(|c| c.map(|v| v as f32)).collect();
+    Ok(RgbImage::new(image.width, image.height, data))
 }

@@ -312,7 +312,7 @@ fn write_rw_layers(path: &Path, run: &crate::pipeline::RwRun, exposure: f32) -> 
     let f32s = |v: &[[f64; 3]]| v.iter().map(|c| c.map(|x| x as f32)).collect::<Vec<_>>();
     write_image(
         &sibling(path, "unfiltered"),
-        &RgbImage::new(w, h, run.film.mean_rgb()),
+        &RgbImage::new(w, h, f32s(&run.unfiltered)),
         exposure,
         &[],
     )?;

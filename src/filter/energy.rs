@@ -130,11 +130,16 @@ pub fn mt_ceiling(mt: u32) -> u32 {
 
 /// All pilot figures from a pilot film (16 trials per pixel).
 pub fn pilot(film: &Film, d: f64) -> Result<Pilot, String> {
-    check_d(d)?;
     let s: Vec<f64> = film.pixels.iter().map(deviation).collect();
     let mean: Vec<[f64; 3]> = film.pixels.iter().map(|p| p.mean()).collect();
-    let s16 = s16(&s);
-    let l_ave = l_ave(&mean);
+    pilot_of(&mean, &s, d)
+}
+
+/// All pilot figures from the pilot's per-pixel means (L_ave) and deviations (S_16).
+pub fn pilot_of(mean: &[[f64; 3]], s: &[f64], d: f64) -> Result<Pilot, String> {
+    check_d(d)?;
+    let s16 = s16(s);
+    let l_ave = l_ave(mean);
     let lt = lt_vis(l_ave);
     let mt = mt(s16, d, lt)?;
     Ok(Pilot {

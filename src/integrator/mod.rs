@@ -12,6 +12,7 @@ pub mod bdpt;
 pub mod gather;
 pub mod path;
 pub mod rr;
+pub mod visible;
 
 use crate::math::{Ray, Vec2};
 use crate::sampling::SampleStream;
@@ -20,6 +21,7 @@ use crate::scene::{Camera, Scene};
 pub use bdpt::MisHeuristic;
 pub use gather::Gather;
 pub use rr::{BsdfSelect, RadianceEstimate, Roulette, RrMode, RrWeight};
+pub use visible::Visible;
 
 use crate::radiosity::{RadiositySettings, Solution};
 use std::sync::Arc;
@@ -74,6 +76,9 @@ pub struct IntegratorSettings {
     pub radiosity: RadiositySettings,
     /// BDPT's weighting of the strategies.
     pub mis: MisHeuristic,
+    /// Which part of the radiance a sample returns (`--method rw` separates the light
+    /// seen directly; every other render: all of it).
+    pub visible: Visible,
 }
 
 impl Default for IntegratorSettings {
@@ -86,6 +91,7 @@ impl Default for IntegratorSettings {
             gather_depth: 1,
             radiosity: RadiositySettings::default(),
             mis: MisHeuristic::Balance,
+            visible: Visible::All,
         }
     }
 }
@@ -245,8 +251,18 @@ impl Integrator {
         i
     }
 
+    /// The same estimator returning the part `v` of each sample's radiance.
+    pub fn with_visible(&self, v: Visible) -> Integrator {
+        let mut i = self.clone();
+        i.set.visible = v;
+        i
+    }
+
     /// Whether this estimator sends splats (the film then keeps splat and batch sums).
     pub fn splats(&self) -> bool {
+        if self.set.visible == Visible::Only {
+            return false;
+        }
         match self.set.kind {
             IntegratorKind::Path | IntegratorKind::Radiosity => false,
             IntegratorKind::Bdpt => true,
@@ -255,10 +271,38 @@ impl Integrator {
         }
     }
 
-    /// One camera sample of pixel (x, y): its value (linear RGB); splats go to `sink`.
+    /// One camera sample of pixel (x, y): its value (linear RGB), or the part of it that
+    /// `IntegratorSettings::visible` asks for; splats go to `sink`.
     #[inline]
     #[allow(clippy::too_many_arguments)]
     pub fn sample<const N: usize>(
+        &self,
+        scene: &Scene,
+        cam: &Camera,
+        x: u32,
+        y: u32,
+        s: &mut SampleStream,
+        sink: &mut SplatSink,
+        c: &mut Counters,
+    ) -> [f32; 3] {
+        match self.set.visible {
+            Visible::All => self.sample_all::<N>(scene, cam, x, y, s, sink, c),
+            Visible::Only => {
+                let ray = camera_ray(cam, x, y, s);
+                visible::emission::<N>(scene, ray, self.set.max_segments(), c).to_rgb()
+            }
+            Visible::Exclude => {
+                let ray = camera_ray(cam, x, y, &mut s.clone());
+                let f = visible::emission::<N>(scene, ray, self.set.max_segments(), c).to_rgb();
+                let l = self.sample_all::<N>(scene, cam, x, y, s, sink, c);
+                [l[0] - f[0], l[1] - f[1], l[2] - f[2]]
+            }
+        }
+    }
+
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn sample_all<const N: usize>(
         &self,
         scene: &Scene,
         cam: &Camera,

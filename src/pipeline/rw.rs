@@ -24,7 +24,7 @@ use crate::film::Film;
 use crate::filter::energy::{
     self, converged, deviation, EnergyOutput, EnergyParams, Pilot, CEILING_FACTOR, PILOT_TRIALS,
 };
-use crate::integrator::{Counters, Integrator};
+use crate::integrator::{Counters, Integrator, Visible};
 use crate::progress::Progress;
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -47,6 +47,18 @@ pub struct RwParams {
     /// RW: skip the energy-preserving filter (the image is the trials' means).
     #[arg(long = "rw-no-filter")]
     pub no_filter: bool,
+    /// RW: test and filter the light seen directly (through mirrors and glass) with the
+    /// rest, as the paper's text does. By default it is kept apart: a pixel on an emitter's
+    /// edge varies only with its footprint, and its excess is an edge, not noise.
+    #[arg(long = "rw-filter-emitters")]
+    pub filter_emitters: bool,
+    /// RW: stop each pixel on its own deviation S_p, as the paper does. By default the
+    /// stopping test reads the RMS deviation of the pixel's 3x3 neighbourhood: a pixel's
+    /// own S_p is correlated with its own mean (a pixel that has not yet met its rare
+    /// bright paths looks converged and stops low), which biased images by several
+    /// percent; the filter still tests each pixel on its own S_p.
+    #[arg(long = "rw-pixel-test")]
+    pub pixel_test: bool,
 }
 
 impl Default for RwParams {
@@ -100,7 +112,7 @@ pub struct RwStats {
     pub predicted_trials: f64,
     pub average_trials: f64,
     pub passes: u32,
-    /// Share of pixels converged at the end of the trials.
+    /// Share of pixels whose stopping test passed at the end of the trials.
     pub converged_share: f64,
     /// Share of noise pixels (not converged) the filter saw, and of those it spread.
     pub noise_share: f64,
@@ -115,7 +127,10 @@ pub struct RwStats {
 /// Everything the method produced.
 pub struct RwRun {
     pub pilot: Pilot,
-    /// The trials (unfiltered).
+    /// The trials' means (unfiltered), light seen directly included.
+    pub unfiltered: Vec<[f64; 3]>,
+    /// The trials of what was tested and filtered: the transport, without the light seen
+    /// directly unless `--rw-filter-emitters` (its statistics are the variance layers).
     pub film: Film,
     /// Trials each pixel got.
     pub trials: Vec<u32>,
@@ -124,6 +139,33 @@ pub struct RwRun {
     pub stats: RwStats,
     pub counters: Counters,
     pub seconds: f64,
+}
+
+/// The RMS of S_p over pixel i's 3x3 neighbourhood (clipped at the image's borders).
+fn pooled_deviation(s_p: &[f64], w: usize, h: usize, i: usize) -> f64 {
+    let (x, y) = (i % w, i / w);
+    let (mut sum, mut n) = (0.0, 0.0);
+    for yy in y.saturating_sub(1)..(y + 2).min(h) {
+        for xx in x.saturating_sub(1)..(x + 2).min(w) {
+            sum += s_p[yy * w + xx].powi(2);
+            n += 1.0;
+        }
+    }
+    (sum / n).sqrt()
+}
+
+/// Per-pixel means of a film, plus those of a second film of the same size.
+fn sum_means(a: &Film, b: Option<&Film>) -> Vec<[f64; 3]> {
+    let mut m: Vec<[f64; 3]> = a.pixels.iter().map(|p| p.mean()).collect();
+    if let Some(b) = b {
+        for (o, p) in m.iter_mut().zip(&b.pixels) {
+            let v = p.mean();
+            for c in 0..3 {
+                o[c] += v[c];
+            }
+        }
+    }
+    m
 }
 
 /// Predicted trials of a pixel of pilot deviation S_p: (t S_p / (D Lt_vis))^2.
@@ -171,21 +213,39 @@ pub fn render_rw(
     let pilot_pixels = (params.pilot_res as u64).pow(2);
     let mut planned = pilot_pixels * PILOT_TRIALS as u64;
     progress.begin("trials", planned);
+    // The transport (tested and filtered) and the light seen directly (added back), from
+    // the same samples: their sum is the plain estimate, sample by sample.
+    let (transport, direct) = if params.filter_emitters {
+        (integrator.clone(), None)
+    } else {
+        (
+            integrator.with_visible(Visible::Exclude),
+            Some(integrator.with_visible(Visible::Only)),
+        )
+    };
     let mut pfilm = Film::new(pset.width, pset.height)?;
-    let mut counters = render_pass(
-        &Pass {
-            scene,
-            integrator,
-            set: &pset,
-            counts: Counts::Uniform(PILOT_TRIALS),
-            first_index: 0,
-            stream: 1,
-            progress,
-        },
-        &mut pfilm,
-        None,
-    );
-    let pilot = energy::pilot(&pfilm, params.d)?;
+    let mut pvis = Film::new(pset.width, pset.height)?;
+    let mut counters = Counters::default();
+    for (it, f) in [(Some(&transport), &mut pfilm), (direct.as_ref(), &mut pvis)] {
+        if let Some(it) = it {
+            counters.add(&render_pass(
+                &Pass {
+                    scene,
+                    integrator: it,
+                    set: &pset,
+                    counts: Counts::Uniform(PILOT_TRIALS),
+                    first_index: 0,
+                    stream: 1,
+                    progress,
+                },
+                f,
+                None,
+            ));
+        }
+    }
+    let pmean = sum_means(&pfilm, direct.as_ref().map(|_| &pvis));
+    let ps: Vec<f64> = pfilm.pixels.iter().map(deviation).collect();
+    let pilot = energy::pilot_of(&pmean, &ps, params.d)?;
     let pilot_seconds = t0.elapsed().as_secs_f64();
     let allowed = params.d * pilot.lt_vis;
     let needs: Vec<f64> = pfilm
@@ -196,7 +256,7 @@ pub fn render_rw(
 
     // Mt used, and the cap on the total trials.
     let (mt, cap_total, deadline) = match budget {
-        RwBudget::Convergence => (pilot.mt.max(2), u64::MAX, None),
+        RwBudget::Convergence => (pilot.mt.max(PILOT_TRIALS), u64::MAX, None),
         RwBudget::Spp(spp) => (
             mt_for_budget(&needs, spp),
             (spp * pixels as f64).round() as u64,
@@ -216,31 +276,55 @@ pub fn render_rw(
     // 2. Trials: Mt everywhere, then passes for the pixels not yet converged.
     let t1 = Instant::now();
     let mut film = Film::new(set.width, set.height)?;
+    let mut vfilm = Film::new(set.width, set.height)?;
     let first = mt.min((cap_total / pixels.max(1) as u64).min(u32::MAX as u64) as u32);
     let first = first.max(1);
     planned += first as u64 * pixels as u64;
     progress.set_total(planned);
     let step = mt.div_ceil(4).max(1);
-    let pass = |counts: Counts, first_index: u32, film: &mut Film| {
-        render_pass(
-            &Pass {
-                scene,
-                integrator,
-                set,
-                counts,
-                first_index,
-                stream: 0,
-                progress,
-            },
-            film,
-            None,
-        )
+    let pass = |counts: Counts, first_index: u32, film: &mut Film, vfilm: &mut Film| {
+        let mut c = Counters::default();
+        for (it, f) in [(Some(&transport), film), (direct.as_ref(), vfilm)] {
+            if let Some(it) = it {
+                c.add(&render_pass(
+                    &Pass {
+                        scene,
+                        integrator: it,
+                        set,
+                        counts,
+                        first_index,
+                        stream: 0,
+                        progress,
+                    },
+                    f,
+                    None,
+                ));
+            }
+        }
+        c
     };
-    counters.add(&pass(Counts::Uniform(first), 0, &mut film));
+    counters.add(&pass(Counts::Uniform(first), 0, &mut film, &mut vfilm));
     let mut trials = vec![first; pixels];
     let mut done = first; // trials of every pixel still running
     let mut spent = first as u64 * pixels as u64;
     let mut passes = 1u32;
+    let (w, h) = (set.width as usize, set.height as usize);
+    let conv_map = |film: &Film| {
+        let s_p: Vec<f64> = film.pixels.iter().map(deviation).collect();
+        (0..pixels)
+            .map(|i| {
+                let s = if params.pixel_test {
+                    s_p[i]
+                } else {
+                    pooled_deviation(&s_p, w, h, i)
+                };
+                // no pixel stops before it has the pilot's 16 trials: S_p from fewer is
+                // too unstable (and too correlated with the mean) to stop on
+                film.pixels[i].n >= PILOT_TRIALS
+                    && converged(params.t, s, film.pixels[i].n, params.d, pilot.lt_vis)
+            })
+            .collect::<Vec<bool>>()
+    };
     let is_conv = |film: &Film, i: usize| {
         converged(
             params.t,
@@ -250,7 +334,7 @@ pub fn render_rw(
             pilot.lt_vis,
         )
     };
-    let mut active: Vec<bool> = (0..pixels).map(|i| !is_conv(&film, i)).collect();
+    let mut active: Vec<bool> = conv_map(&film).iter().map(|&c| !c).collect();
     while done < ceiling && !progress.cancelled() {
         if let Some(dl) = deadline {
             let el = t0.elapsed().as_secs_f64();
@@ -274,11 +358,17 @@ pub fn render_rw(
         let counts: Vec<u32> = active.iter().map(|&a| if a { k } else { 0 }).collect();
         planned += k as u64 * n_active;
         progress.set_total(planned);
-        counters.add(&pass(Counts::PerPixel(&counts), done, &mut film));
+        counters.add(&pass(
+            Counts::PerPixel(&counts),
+            done,
+            &mut film,
+            &mut vfilm,
+        ));
+        let conv = conv_map(&film);
         for (i, t) in trials.iter_mut().enumerate() {
             if active[i] {
                 *t += k;
-                active[i] = !is_conv(&film, i);
+                active[i] = !conv[i];
             }
         }
         spent += k as u64 * n_active;
@@ -294,7 +384,7 @@ pub fn render_rw(
         lt_vis: pilot.lt_vis,
         t: params.t,
     };
-    let out = if params.no_filter {
+    let mut out = if params.no_filter {
         let mean: Vec<[f64; 3]> = film.pixels.iter().map(|p| p.mean()).collect();
         let noise: Vec<bool> = (0..pixels).map(|i| !is_conv(&film, i)).collect();
         let noise_pixels = noise.iter().filter(|&&x| x).count();
@@ -311,9 +401,20 @@ pub fn render_rw(
     } else {
         energy::energy_filter_film(&film, &ep)?
     };
+    // The light seen directly goes back in, unfiltered.
+    let vis = direct.as_ref().map(|_| &vfilm);
+    if let Some(v) = vis {
+        for (o, p) in out.image.iter_mut().zip(&v.pixels) {
+            let m = p.mean();
+            for c in 0..3 {
+                o[c] += m[c];
+            }
+        }
+    }
+    let unfiltered = sum_means(&film, vis);
     let filter_seconds = t2.elapsed().as_secs_f64();
     progress.finish();
-    let conv = (0..pixels).filter(|&i| is_conv(&film, i)).count();
+    let conv = conv_map(&film).iter().filter(|&&c| c).count();
     let np = pixels.max(1) as f64;
     let stats = RwStats {
         s16: pilot.s16,
@@ -339,6 +440,7 @@ pub fn render_rw(
     };
     Ok(RwRun {
         pilot,
+        unfiltered,
         film,
         trials,
         out,
@@ -385,7 +487,7 @@ mod tests {
         j.rw.pilot_res = 32;
         let r = render_scene(&scene, &j, &crate::progress::Silent).unwrap();
         let run = r.rw.as_ref().unwrap();
-        let unf: Vec<[f64; 3]> = run.film.pixels.iter().map(|p| p.mean()).collect();
+        let unf = run.unfiltered.clone();
         let (lf, lu) = (lum_mean(&run.out.image), lum_mean(&unf));
         let sigma = sigma_of_mean(&run.film);
         eprintln!(
@@ -404,13 +506,15 @@ mod tests {
     }
 
     /// The pilot predicts: at Mt_ceiling at least 90% of pixels have converged (the
-    /// paper's claim), on cornell and rw-room at the pilot's own resolution. D = 20 keeps
-    /// the test short: the share does not depend on D (need_p / Mt is D-free), only on how
-    /// heavy the tails are. Measured: rw-room 0.99, cornell 0.899 (see the report): cornell
-    /// misses the bar narrowly, so its case is ignored by default, not loosened.
-    fn converged_share(scene: &str) -> f64 {
+    /// paper's claim), on cornell and rw-room at the pilot's own resolution. The share
+    /// does not depend on D while Eq. 10's Mt is above the 16-trial floor (need_p / Mt is
+    /// D-free). Measured (stopping on the pooled 3x3 deviation, light seen directly kept
+    /// apart): rw-room 0.994 at D 20; cornell 0.55 at D 5 (trials 511 where the pilot
+    /// predicted 340: its 16 trials miss the heavy tails of the ceiling near the light), so
+    /// cornell's case is ignored by default, not loosened.
+    fn converged_share(scene: &str, d: f64) -> f64 {
         let s = crate::scene::load(scene).unwrap();
-        let r = render_scene(&s, &job(scene, 100, 20.0), &crate::progress::Silent).unwrap();
+        let r = render_scene(&s, &job(scene, 100, d), &crate::progress::Silent).unwrap();
         let st = r.stats.rw.unwrap();
         eprintln!(
             "{scene}: converged share {:.4} at Mt_ceiling {} (Mt {}, trials {:.1}, predicted {:.1})",
@@ -421,62 +525,75 @@ mod tests {
 
     #[test]
     fn pilot_predicts_convergence_on_rw_room() {
-        assert!(converged_share("rw-room") >= 0.9);
+        assert!(converged_share("rw-room", 20.0) >= 0.9);
     }
 
     #[test]
-    #[ignore = "measured 0.899 < 0.9 on cornell (D 20, 100x100): the paper's 90% is missed narrowly"]
+    #[ignore = "measured 0.55 < 0.9 on cornell (D 5, 100x100, pooled stopping test): the 16-trial pilot misses the heavy tails near the light"]
     fn pilot_predicts_convergence_on_cornell() {
-        assert!(converged_share("cornell") >= 0.9);
+        assert!(converged_share("cornell", 5.0) >= 0.9);
     }
 
     /// Early stopping on a variance estimate: a pixel that has not yet met its rare bright
     /// paths looks converged and stops low. Measured as the image mean of rw without the
-    /// filter against plain path tracing with many samples (z-test, |z| < 4).
-    fn early_stopping_z(scene: &str) -> f64 {
+    /// filter over 8 seeds against plain path tracing with many samples; the standard
+    /// error is the seeds' spread (one run's S_p underestimates it where tails are heavy).
+    /// Measured at 24x24, D 10, 10 seeds (README): the paper's per-pixel test
+    /// (`--rw-pixel-test`) is 1.6% low on cornell (z -5.0), the default pooled test
+    /// 0.26% (z -0.8).
+    fn early_stopping_z(scene: &str, pixel_test: bool) -> f64 {
         let s = crate::scene::load(scene).unwrap();
-        let mut j = job(scene, 24, 10.0);
-        j.rw.no_filter = true;
-        j.rw.pilot_res = 50;
-        let r = render_scene(&s, &j, &crate::progress::Silent).unwrap();
-        let run = r.rw.unwrap();
-        let unf: Vec<[f64; 3]> = run.film.pixels.iter().map(|p| p.mean()).collect();
-        let (m_rw, s_rw) = (lum_mean(&unf), sigma_of_mean(&run.film));
+        let lum = |r: &crate::render::Rendered| {
+            let m = r.image.mean();
+            energy::luminance(m)
+        };
         let mut p = RenderJob::new(scene);
         p.res = Some((24, 24));
-        p.spp = Some(1024);
-        p.seed = 7;
+        p.spp = Some(4096);
+        p.seed = 1000;
         let rp = render_scene(&s, &p, &crate::progress::Silent).unwrap();
-        let ref_img: Vec<[f64; 3]> = rp.film.pixels.iter().map(|q| q.mean()).collect();
-        let (m_ref, s_ref) = (lum_mean(&ref_img), sigma_of_mean(&rp.film));
+        let (m_ref, s_ref) = (lum(&rp), sigma_of_mean(&rp.film));
+        let runs: Vec<f64> = (0..8)
+            .map(|seed| {
+                let mut j = job(scene, 24, 10.0);
+                j.rw.no_filter = true;
+                j.rw.pilot_res = 50;
+                j.rw.pixel_test = pixel_test;
+                j.seed = seed;
+                lum(&render_scene(&s, &j, &crate::progress::Silent).unwrap())
+            })
+            .collect();
+        let n = runs.len() as f64;
+        let m_rw = runs.iter().sum::<f64>() / n;
+        let var = runs.iter().map(|x| (x - m_rw).powi(2)).sum::<f64>() / (n - 1.0);
+        let s_rw = (var / n).sqrt();
         let z = (m_rw - m_ref) / (s_rw * s_rw + s_ref * s_ref).sqrt();
         eprintln!(
-            "{scene}: rw unfiltered {m_rw:.6} +- {s_rw:.2e} ({:.1} trials), plain 1024 spp {m_ref:.6} +- {s_ref:.2e}: z = {z:.2}, relative {:+.4}",
-            run.stats.average_trials,
+            "{scene} (pixel test {pixel_test}): rw unfiltered {m_rw:.6} +- {s_rw:.2e} over 8 seeds, plain 4096 spp {m_ref:.6} +- {s_ref:.2e}: z = {z:.2}, relative {:+.4}",
             m_rw / m_ref - 1.0
         );
         z
     }
 
     #[test]
-    fn early_stopping_bias_is_within_noise_on_rw_room() {
-        let z = early_stopping_z("rw-room");
-        assert!(
-            z.abs() < 4.0,
-            "rw-room: early stopping biases the mean: z = {z}"
-        );
+    fn early_stopping_bias_is_within_noise() {
+        for scene in ["cornell", "rw-room"] {
+            let z = early_stopping_z(scene, false);
+            assert!(
+                z.abs() < 4.0,
+                "{scene}: early stopping biases the mean: z = {z}"
+            );
+        }
     }
 
-    /// On cornell early stopping does bias the image low: this test fails (z = -4.1 here;
-    /// over 10 seeds at 24x24, D 10 the unfiltered mean is 1.46% below a plain 8192-spp
-    /// reference, z = -5.8), so it is ignored by default and kept as the measurement.
+    /// The paper's per-pixel stopping test, kept as the measurement of its bias.
     #[test]
-    #[ignore = "measured: early stopping biases cornell's mean by -1.5% (z -5.8 over 10 seeds)"]
-    fn early_stopping_bias_is_within_noise_on_cornell() {
-        let z = early_stopping_z("cornell");
+    #[ignore = "measured: the per-pixel test biases cornell's mean by -1.6% (z -5.0 over 10 seeds)"]
+    fn per_pixel_stopping_is_biased_on_cornell() {
+        let z = early_stopping_z("cornell", true);
         assert!(
             z.abs() < 4.0,
-            "cornell: early stopping biases the mean: z = {z}"
+            "cornell: per-pixel stopping biases the mean: z = {z}"
         );
     }
 

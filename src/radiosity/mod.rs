@@ -265,6 +265,8 @@ impl Solution {
             emitted_power: emitted,
             shots: 0,
             rays: 0,
+            rows: vec![None; 2 * ne],
+            row_bytes: 0,
         };
 
         // --- shoot until the unshot power is below tolerance x emitted

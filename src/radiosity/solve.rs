@@ -258,7 +258,16 @@ pub struct Shooter<'a> {
     pub emitted_power: f64,
     pub shots: u64,
     pub rays: u64,
+    /// Form-factor rows of the patches shot so far (F_ij of patch i = p / 2 to every
+    /// element j, both receiving sides, and the row's normalisation): a patch shot again
+    /// (it keeps receiving while others shoot) reuses its row instead of casting its rays
+    /// again. Rows are kept while they fit in ROW_CACHE_BYTES.
+    pub rows: Vec<Option<(Vec<[f32; 2]>, f64)>>,
+    pub row_bytes: usize,
 }
+
+/// Memory the cached form-factor rows may take.
+pub const ROW_CACHE_BYTES: usize = 1 << 30;
 
 impl Shooter<'_> {
     /// Unshot power of patch p (band average of dB x A).
@@ -292,34 +301,44 @@ impl Shooter<'_> {
         let bvh = self.bvh;
         let pat = &self.patterns;
         let rho = &self.rho;
-        let ff: Vec<([f32; 2], u32)> = self
-            .elems
-            .par_iter()
-            .enumerate()
-            .with_min_len(64)
-            .map(|(j, e)| {
-                if j == si || rho[j * nb..(j + 1) * nb].iter().all(|&r| r <= 0.0) {
-                    return ([0.0; 2], 0);
-                }
-                element_to_element(bvh, e, &src, src_n, pat)
-            })
-            .collect();
-        // Normalisation: the receivers' share of the source's power, sum_j A_j F_ji / A_i
-        // = sum_j F_ij by reciprocity, cannot exceed 1. Where point estimates overshoot
-        // (receivers nearly touching the source) by more than ROW_SLACK the row is scaled
-        // back to 1, so every shot passes on at most rho (1 + ROW_SLACK) times its power
-        // and the iteration converges; below it the estimates are left as they are (the
-        // quadrature's own error, some 1% in the corners of a room).
-        let row: f64 = ff
-            .iter()
-            .zip(self.elems)
-            .map(|((f, _), e)| (f[0] + f[1]) as f64 * e.area as f64)
-            .sum::<f64>()
-            / src.area as f64;
-        let norm = if row > 1.0 + ROW_SLACK {
-            1.0 / row
-        } else {
-            1.0
+        let cached = self.rows.get_mut(p).and_then(|r| r.take());
+        let was_cached = cached.is_some();
+        let (ff, norm) = match cached {
+            Some(row) => row,
+            None => {
+                let ff: Vec<([f32; 2], u32)> = self
+                    .elems
+                    .par_iter()
+                    .enumerate()
+                    .with_min_len(64)
+                    .map(|(j, e)| {
+                        if j == si || rho[j * nb..(j + 1) * nb].iter().all(|&r| r <= 0.0) {
+                            return ([0.0; 2], 0);
+                        }
+                        element_to_element(bvh, e, &src, src_n, pat)
+                    })
+                    .collect();
+                self.rays += ff.iter().map(|&(_, r)| r as u64).sum::<u64>();
+                // Normalisation: the receivers' share of the source's power, sum_j A_j
+                // F_ji / A_i = sum_j F_ij by reciprocity, cannot exceed 1. Where point
+                // estimates overshoot (receivers nearly touching the source) by more than
+                // ROW_SLACK the row is scaled back to 1, so every shot passes on at most
+                // rho (1 + ROW_SLACK) times its power and the iteration converges; below
+                // it the estimates are left as they are (the quadrature's own error, some
+                // 1% in the corners of a room).
+                let row: f64 = ff
+                    .iter()
+                    .zip(self.elems)
+                    .map(|((f, _), e)| (f[0] + f[1]) as f64 * e.area as f64)
+                    .sum::<f64>()
+                    / src.area as f64;
+                let norm = if row > 1.0 + ROW_SLACK {
+                    1.0 / row
+                } else {
+                    1.0
+                };
+                (ff.into_iter().map(|(f, _)| f).collect::<Vec<_>>(), norm)
+            }
         };
         let shot: Vec<f64> = self.db[p * nb..(p + 1) * nb]
             .iter()
@@ -328,8 +347,7 @@ impl Shooter<'_> {
         for b in &mut self.db[p * nb..(p + 1) * nb] {
             *b = 0.0;
         }
-        for (j, (f, rays)) in ff.iter().enumerate() {
-            self.rays += *rays as u64;
+        for (j, f) in ff.iter().enumerate() {
             for (side, &fs) in f.iter().enumerate() {
                 if fs <= 0.0 {
                     continue;
@@ -343,5 +361,12 @@ impl Shooter<'_> {
             }
         }
         self.shots += 1;
+        let bytes = ff.len() * std::mem::size_of::<[f32; 2]>();
+        if was_cached {
+            self.rows[p] = Some((ff, norm));
+        } else if p < self.rows.len() && self.row_bytes + bytes <= ROW_CACHE_BYTES {
+            self.row_bytes += bytes;
+            self.rows[p] = Some((ff, norm));
+        }
     }
 }

@@ -1,0 +1,147 @@
+//! Light seen directly: the emission a camera ray reaches through ideal mirrors and smooth
+//! glass only, as an expectation (both branches of a glass interface, weighted by their
+//! Fresnel probabilities), so it is a deterministic function f(ray).
+//!
+//! Rushmeier and Ward's noise test and filter are about transport noise. A pixel on an
+//! emitter's edge varies from sample to sample only because its footprint straddles the
+//! edge, and its excess is real image structure, not noise to be spread. `Visible::Exclude`
+//! makes each sample return L - f(ray) (a control variate: any f keeps the estimate
+//! unbiased), and `Visible::Only` returns f(ray), so a method can test and filter the
+//! transport and add the light seen directly back unfiltered.
+
+use crate::material::{dielectric::fresnel_dielectric, Bsdf};
+use crate::math::{offset_origin, Frame, Ray};
+use crate::scene::Scene;
+use crate::spectrum::Spectrum;
+
+use super::Counters;
+
+/// Which part of a sample's radiance `Integrator::sample` returns.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Visible {
+    /// All of it (every render but the ones below).
+    #[default]
+    All,
+    /// Everything but the light seen directly: L - f(ray).
+    Exclude,
+    /// Only the light seen directly, f(ray).
+    Only,
+}
+
+/// Branches of a glass tree deeper than this are dropped (their weight is below F^8).
+const MAX_BRANCH_DEPTH: u32 = 8;
+
+/// f(ray): emission reached through mirrors and smooth glass, at most `max_segments`
+/// segments (Mitsuba's max_depth, as the path tracer counts them).
+pub fn emission<const N: usize>(
+    scene: &Scene,
+    ray: Ray,
+    max_segments: u32,
+    c: &mut Counters,
+) -> Spectrum<N> {
+    trace(scene, ray, Spectrum::ONE, 1, max_segments, 0, c)
+}
+
+fn trace<const N: usize>(
+    scene: &Scene,
+    mut ray: Ray,
+    mut beta: Spectrum<N>,
+    mut segments: u32,
+    max_segments: u32,
+    branches: u32,
+    c: &mut Counters,
+) -> Spectrum<N> {
+    let mut l = Spectrum::<N>::ZERO;
+    loop {
+        c.rays += 1;
+        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
+            return l;
+        };
+        let mat = scene.material_of(hit.prim);
+        let wo = -ray.d;
+        let cos_o = wo.dot(hit.ng);
+        if mat.is_emissive() && cos_o > 0.0 {
+            l += beta * Spectrum::<N>::from_rgb(mat.emitted(cos_o));
+        }
+        if segments >= max_segments {
+            return l;
+        }
+        let bsdf = mat.bsdf;
+        let (ng, ns) = if bsdf.is_two_sided() && cos_o < 0.0 {
+            (-hit.ng, -hit.ns)
+        } else {
+            (hit.ng, hit.ns)
+        };
+        let frame = Frame::from_normal(ns);
+        let wo_l = frame.to_local(wo);
+        // The next segment's ray from a local direction, if it leaves on the side the
+        // geometric normal says (as the path tracer requires).
+        let next = |wi_l: glam::Vec3| {
+            let wi = frame.to_world(wi_l);
+            ((wi.dot(ng) > 0.0) == (wi_l.z > 0.0))
+                .then(|| Ray::new(offset_origin(hit.p, ng, wi), wi))
+        };
+        match bsdf {
+            Bsdf::Mirror(m) => {
+                let Some(bs) = m.sample::<N>(wo_l) else {
+                    return l;
+                };
+                let Some(r) = next(bs.wi) else {
+                    return l;
+                };
+                beta *= bs.weight;
+                ray = r;
+            }
+            Bsdf::Dielectric(d) => {
+                // E over the Fresnel choice: F x (reflection, weight 1) +
+                // (1 - F) x (refraction, weight eta_r^2).
+                let (f, _, eta_r) = fresnel_dielectric(wo_l.z, d.eta);
+                let refl = d.sample::<N>(wo_l, 0.0).filter(|_| f > 0.0);
+                let refr = d
+                    .sample::<N>(wo_l, 1.0)
+                    .filter(|b| f < 1.0 && b.wi.z * wo_l.z < 0.0);
+                let _ = eta_r;
+                match (refl, refr) {
+                    (Some(a), Some(b)) if branches < MAX_BRANCH_DEPTH => {
+                        if let Some(r) = next(a.wi) {
+                            l += trace(
+                                scene,
+                                r,
+                                beta * (a.weight * f),
+                                segments + 1,
+                                max_segments,
+                                branches + 1,
+                                c,
+                            );
+                        }
+                        let Some(r) = next(b.wi) else {
+                            return l;
+                        };
+                        beta *= b.weight * (1.0 - f);
+                        ray = r;
+                    }
+                    (Some(a), _) => {
+                        let Some(r) = next(a.wi) else {
+                            return l;
+                        };
+                        beta *= a.weight * f;
+                        ray = r;
+                    }
+                    (None, Some(b)) => {
+                        let Some(r) = next(b.wi) else {
+                            return l;
+                        };
+                        beta *= b.weight * (1.0 - f);
+                        ray = r;
+                    }
+                    (None, None) => return l,
+                }
+            }
+            _ => return l,
+        }
+        segments += 1;
+        if beta.is_black() {
+            return l;
+        }
+    }
+}
