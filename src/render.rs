@@ -465,12 +465,19 @@ pub fn render_scene(
         && film.total_samples() > 0
         && image.data.iter().all(|p| *p == [0.0; 3])
     {
-        warnings.push(
-            "the image is all black: check that the camera looks at the scene (--camera) and \
-             that the emitters face what it sees (an emitter shines only on its \
-             counter-clockwise side)"
-                .to_string(),
-        );
+        let camera = if job.camera.is_some() {
+            "the camera given with --camera".to_string()
+        } else {
+            format!(
+                "the camera ({}: `kalos info` prints it)",
+                scene.info.camera_from
+            )
+        };
+        warnings.push(format!(
+            "the image is all black: check that {camera} looks at the lit side of the scene \
+             (inside a closed room, not at its outer walls) and that the emitters face what \
+             it sees (an emitter shines only on its counter-clockwise side)"
+        ));
     }
     let stats = RenderStats {
         scene: scene.info.name.clone(),

@@ -764,3 +764,59 @@ fn rw_bad_d_and_filter_energy_without_layers() {
     assert_eq!(code, 0, "{err}");
     assert!(out.is_file());
 }
+
+#[test]
+fn bad_mitsuba_xml_and_ply_give_one_line_errors() {
+    let d = temp_dir("xml");
+    let head = "<scene version=\"3.0.0\">\n";
+    let ply_ok = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    write(
+        &d,
+        "bad-header.ply",
+        ply_ok.replace("element vertex 3", "element vertex three"),
+    );
+    write(&d, "short.ply", &ply_ok[..ply_ok.len() - 10]);
+    write(&d, "sky.exr", "this is not an image");
+    let shape = |f: &str| {
+        format!("<shape type=\"ply\"><string name=\"filename\" value=\"{f}\"/></shape>\n")
+    };
+    let cases: Vec<(&str, String, Vec<&str>)> = vec![
+        (
+            "malformed.xml",
+            format!("{head}<shape type=\"cube\">\n  <bsdf type=\"diffuse\"\n</scene>\n"),
+            vec!["malformed.xml:4:", "malformed XML"],
+        ),
+        (
+            "ref.xml",
+            format!("{head}<shape type=\"cube\">\n<ref id=\"nope\"/></shape></scene>"),
+            vec!["ref.xml:3:", "<ref id=\"nope\">", "no element has that id"],
+        ),
+        (
+            "plugin.xml",
+            format!("{head}<shape type=\"cube\"><bsdf type=\"velvet\"/></shape></scene>"),
+            vec!["plugin.xml:2:", "unknown bsdf plugin 'velvet'"],
+        ),
+        (
+            "plyhead.xml",
+            format!("{head}{}</scene>", shape("bad-header.ply")),
+            vec!["plyhead.xml:2:", "bad-header.ply:3: bad PLY header"],
+        ),
+        (
+            "plyshort.xml",
+            format!("{head}{}</scene>", shape("short.ply")),
+            vec!["plyshort.xml:2:", "short.ply: PLY element"],
+        ),
+        (
+            "env.xml",
+            format!(
+                "{head}<shape type=\"cube\"/>\n<emitter type=\"envmap\"><string name=\"filename\" value=\"sky.exr\"/></emitter></scene>"
+            ),
+            vec!["env.xml:3:", "sky.exr: not an image"],
+        ),
+    ];
+    for (name, text, needles) in cases {
+        let scene = write(&d, name, text);
+        let (code, err) = render(&d, &scene, &[]);
+        assert_one_line_error(name, code, &err, 1, &needles);
+    }
+}

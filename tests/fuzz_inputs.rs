@@ -443,3 +443,152 @@ fn special_files_are_refused_without_reading() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+const XML: &str = r#"<scene version="3.0.0">
+<default name="r" value="0.5"/>
+<bsdf type="roughplastic" id="p"><float name="alpha" value="$r"/><string name="distribution" value="ggx"/>
+<rgb name="diffuse_reflectance" value="0.2, 0.3, 0.4"/></bsdf>
+<bsdf type="twosided" id="d"><bsdf type="diffuse">
+<spectrum name="reflectance" value="400:0.1, 700:0.9"/></bsdf></bsdf>
+<shape type="rectangle"><transform name="to_world"><scale x="2" y="3"/>
+<rotate x="1" angle="90"/><translate z="1"/></transform><ref id="p"/></shape>
+<shape type="cube"><transform name="to_world">
+<matrix value="1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1"/></transform><ref id="d"/>
+<emitter type="area"><rgb name="radiance" value="1 2 3"/></emitter></shape>
+<shape type="sphere"><point name="center" x="0" y="1" z="0"/><float name="radius" value="0.5"/>
+<bsdf type="conductor"><string name="material" value="Au"/></bsdf></shape>
+<shape type="disk"><boolean name="flip_normals" value="true"/></shape>
+<emitter type="point"><point name="position" value="0, 1, 0"/></emitter>
+<emitter type="constant"><spectrum name="radiance" value="0.5"/></emitter>
+<sensor type="perspective"><float name="fov" value="45"/><string name="fov_axis" value="smaller"/>
+<transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
+<film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="8"/></film>
+<sampler type="independent"><integer name="sample_count" value="4"/></sampler></sensor>
+<integrator type="path"><integer name="max_depth" value="5"/></integrator>
+</scene>"#;
+
+/// XML-specific damage on top of `mutate`: a character deleted or one of the markup
+/// characters inserted.
+fn mutate_xml(text: &str, rng: &mut Rng) -> String {
+    let mut s: Vec<char> = mutate(text, rng).chars().collect();
+    for _ in 0..rng.below(3) {
+        let i = rng.below(s.len() + 1);
+        if rng.below(2) == 0 && i < s.len() {
+            s.remove(i);
+        } else {
+            let c = [
+                '<', '>', '/', '=', '"', '\'', '$', '&', ';', '!', '-', '?', '0',
+            ];
+            s.insert(i, c[rng.below(c.len())]);
+        }
+    }
+    s.into_iter().collect()
+}
+
+#[test]
+fn mutated_mitsuba_xml_never_panics() {
+    use kalos::scene::xml;
+    let dir = Path::new("/nonexistent-kalos-dir");
+    let d = xml::parse(XML, "fuzz.xml", dir).unwrap();
+    assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+    assert!(Scene::build(d, 0.0).is_ok());
+    let mut rng = Rng(0x5eed_1234_abcd_0001);
+    let mut loaded = 0;
+    for _ in 0..300 {
+        let text = mutate_xml(XML, &mut rng);
+        no_panic("XML", &text, || match xml::parse(&text, "fuzz.xml", dir) {
+            Ok(d) => {
+                loaded += 1;
+                let n = d.positions.len();
+                assert!(d.normals.len() == n && d.uvs.len() == n && d.material.len() == n);
+                assert!(d.material.iter().all(|&m| (m as usize) < d.materials.len()));
+                assert!(d.positions.iter().flatten().all(|v| v.is_finite()));
+                let _ = Scene::build(d, 0.0);
+            }
+            Err(e) => assert!(e.starts_with("fuzz.xml") && !e.contains('\n'), "{e}"),
+        });
+    }
+    assert!((10..=290).contains(&loaded), "{loaded} of 300 loaded");
+}
+
+/// A binary little-endian PLY: a quad with normals and UVs and a colour per vertex.
+fn ply_seed() -> Vec<u8> {
+    let mut b = b"ply\nformat binary_little_endian 1.0\ncomment fuzz\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\nproperty uchar red\nelement face 2\nproperty list uchar int vertex_indices\nelement edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n".to_vec();
+    for (x, y) in [(0.0f32, 0.0f32), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+        for v in [x, y, 0.0, 0.0, 0.0, 1.0, x, y] {
+            b.extend(v.to_le_bytes());
+        }
+        b.push(255);
+    }
+    for f in [[0i32, 1, 2], [0, 2, 3]] {
+        b.push(3);
+        for i in f {
+            b.extend(i.to_le_bytes());
+        }
+    }
+    b.extend(0i32.to_le_bytes());
+    b.extend(1i32.to_le_bytes());
+    b
+}
+
+#[test]
+fn mutated_ply_never_panics() {
+    use kalos::scene::ply::parse_ply;
+    let seed = ply_seed();
+    assert_eq!(parse_ply(&seed, "fuzz.ply").unwrap().triangles.len(), 2);
+    let ascii = "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    assert_eq!(
+        parse_ply(ascii.as_bytes(), "fuzz.ply")
+            .unwrap()
+            .triangles
+            .len(),
+        1
+    );
+    let header_end = seed.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let mut rng = Rng(0x0ddb_a11c_0ffe_e123);
+    let mut loaded = 0;
+    for k in 0..400 {
+        let mut b = if k % 4 == 3 {
+            mutate(ascii, &mut rng).into_bytes()
+        } else {
+            seed.clone()
+        };
+        match rng.below(4) {
+            // the header as text
+            0 if k % 4 != 3 => {
+                let head = String::from_utf8_lossy(&b[..header_end]).into_owned();
+                let mut m = mutate(&head, &mut rng).into_bytes();
+                m.extend_from_slice(b"\n");
+                m.extend_from_slice(&b[header_end..]);
+                b = m;
+            }
+            // flip bytes of the payload (counts, indices, floats)
+            1 => {
+                for _ in 0..1 + rng.below(4) {
+                    let i = rng.below(b.len());
+                    b[i] = rng.next() as u8;
+                }
+            }
+            // truncate
+            2 => {
+                let n = rng.below(b.len());
+                b.truncate(n);
+            }
+            _ => {}
+        }
+        let text = String::from_utf8_lossy(&b).into_owned();
+        no_panic("PLY", &text, || match parse_ply(&b, "fuzz.ply") {
+            Ok(m) => {
+                loaded += 1;
+                let n = m.positions.len() as u32;
+                assert!(m.triangles.iter().flatten().all(|&i| i < n));
+                assert!(m.positions.iter().all(|p| p.is_finite()));
+            }
+            Err(e) => {
+                assert!(e.starts_with("fuzz.ply") && !e.contains('\n'), "{e}");
+                assert!(!e.contains("gave up"), "the PLY crate panicked: {e}");
+            }
+        });
+    }
+    assert!((20..=380).contains(&loaded), "{loaded} of 400 loaded");
+}

@@ -168,6 +168,9 @@ pub fn run(cli: Cli) -> Result<(), String> {
                     i.bounds_max[1],
                     i.bounds_max[2]
                 );
+                if let Some(c) = &i.camera {
+                    println!("camera       --camera {} ({})", c.to_arg(), i.camera_from);
+                }
                 println!("load         {:.3} s", i.load_seconds);
                 println!(
                     "bvh          {:.3} s, {} nodes, {:.1} MiB",

@@ -1,4 +1,6 @@
-//! Pinhole perspective camera: origin, target, up, vertical field of view, resolution.
+//! Pinhole perspective camera: origin, target, up, vertical field of view, resolution; and
+//! the camera of a scene that gives none (`default_camera`: framing the bounds, or inside a
+//! closed room).
 //!
 //! Camera importance for light tracing and bidirectional path tracing (Veach's thesis,
 //! section 10.2; pbrt-v4 `PerspectiveCamera::We`): the film is the plane at unit distance
@@ -8,7 +10,8 @@
 //! receives divided by its sample count estimate the same pixel value as its camera rays
 //! (the mean radiance over the pixel). The position is a Dirac point (pdf 1 by convention).
 
-use crate::math::{Ray, Vec2, Vec3};
+use crate::accel::Bvh;
+use crate::math::{Bounds3, Ray, Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CameraDesc {
@@ -207,6 +210,206 @@ impl Camera {
             we,
             pdf: dist2 / cos,
         })
+    }
+}
+
+/// A camera on +z of the bounds' centre looking at it, 45 degrees vertical, far enough
+/// back to frame the bounding sphere.
+pub fn framing_camera(b: &Bounds3) -> CameraDesc {
+    let (c, r) = if b.is_empty() {
+        (Vec3::ZERO, 1.0)
+    } else {
+        (b.centroid(), (b.diagonal() * 0.5).max(1e-3))
+    };
+    let fov = 45.0f32;
+    let dist = r / (fov.to_radians() * 0.5).tan() * 1.1;
+    CameraDesc {
+        origin: (c + Vec3::new(0.0, 0.0, dist)).into(),
+        target: c.into(),
+        up: [0.0, 1.0, 0.0],
+        fov,
+    }
+}
+
+/// The camera kalos chose for a scene that gives none, and why.
+#[derive(Clone, Debug)]
+pub struct DefaultCamera {
+    pub desc: CameraDesc,
+    /// How it was chosen, for `kalos info` ("framing the bounds from +z", ...).
+    pub how: String,
+    /// A warning for the user (the camera was moved inside, or may see nothing).
+    pub warning: Option<String>,
+}
+
+/// Unit directions spread evenly over the sphere (a Fibonacci lattice).
+fn sphere_directions(n: usize) -> Vec<Vec3> {
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = golden * i as f32;
+            Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}
+
+/// Is `to` visible from `from` (nothing in between, up to a small margin)?
+fn visible(bvh: &Bvh, from: Vec3, to: Vec3) -> bool {
+    let d = to - from;
+    let len = d.length();
+    if len <= 1e-6 {
+        return true;
+    }
+    !bvh.occluded(&Ray::new(from, d / len), len * 0.999)
+}
+
+/// The default camera of a scene without one. Normally it frames the bounds from +z
+/// (`framing_camera`). When that camera would see nothing lit — every ray it casts meets
+/// the outside of a closed room whose lights are inside — the camera is placed inside:
+/// at the point of a 7x7x7 grid over the bounds that is enclosed (98% of 64 rays hit
+/// geometry), sees a light, and is farthest from any surface; it looks along the bounds'
+/// longest horizontal axis (y is up), from three quarters of the way back to the wall
+/// behind it, 60 degrees vertical. If no such point exists the framing camera stays and
+/// the warning says how to give one (`--camera`).
+///
+/// `lights`: points on the emitters (triangle centroids, point lights); `environment`:
+/// the scene has light from far away (then the outside is lit and the camera stays).
+pub fn default_camera(
+    bvh: &Bvh,
+    bounds: &Bounds3,
+    lights: &[Vec3],
+    environment: bool,
+) -> DefaultCamera {
+    let outside = framing_camera(bounds);
+    let framing = DefaultCamera {
+        desc: outside,
+        how: "default: framing the bounds from +z".into(),
+        warning: None,
+    };
+    if bounds.is_empty() || environment || lights.is_empty() {
+        return framing;
+    }
+    // does the framing camera see anything lit? (a light seen directly, or a surface
+    // point from which a light is visible)
+    let eps = 1e-4 * bounds.diagonal().max(1e-3);
+    let cam = Camera::new(outside, 16, 16);
+    let step = (lights.len() / 16).max(1);
+    let lit_sample: Vec<Vec3> = lights.iter().step_by(step).copied().collect();
+    let mut sees_lit = false;
+    'rays: for y in 0..16 {
+        for x in 0..16 {
+            let r = cam.ray(x as f32 + 0.5, y as f32 + 0.5);
+            let Some(h) = bvh.intersect(&r, f32::INFINITY) else {
+                continue;
+            };
+            let p = r.at(h.t) - r.d * eps;
+            if lit_sample.iter().any(|&l| visible(bvh, p, l)) {
+                sees_lit = true;
+                break 'rays;
+            }
+        }
+    }
+    if sees_lit {
+        return framing;
+    }
+    // the roomiest enclosed point that sees a light
+    let dirs = sphere_directions(64);
+    let ext = bounds.extent();
+    let n = 7;
+    let mut best: Option<(f32, Vec3)> = None;
+    for k in 0..n * n * n {
+        let (i, j, l) = (k % n, (k / n) % n, k / (n * n));
+        let f = |a: usize| (a as f32 + 0.5) / n as f32;
+        let p = bounds.min + ext * Vec3::new(f(i), f(j), f(l));
+        let mut hits = 0;
+        let mut clearance = f32::INFINITY;
+        for &d in &dirs {
+            if let Some(h) = bvh.intersect(&Ray::new(p, d), f32::INFINITY) {
+                hits += 1;
+                clearance = clearance.min(h.t);
+            }
+        }
+        if (hits as f32) < 0.98 * dirs.len() as f32 {
+            continue;
+        }
+        if !lit_sample.iter().any(|&lp| visible(bvh, p, lp)) {
+            continue;
+        }
+        if best.is_none_or(|(c, _)| clearance > c) {
+            best = Some((clearance, p));
+        }
+    }
+    let fix = "give a camera with --camera ox,oy,oz,tx,ty,tz,ux,uy,uz,fov";
+    let Some((_, p)) = best else {
+        return DefaultCamera {
+            warning: Some(format!(
+                "no camera given, and the default one (outside the bounds, looking at their centre from +z) sees no lit surface; no enclosed point that sees a light was found to move it to: {fix}"
+            )),
+            ..framing
+        };
+    };
+    let axis = if ext.x >= ext.z { Vec3::X } else { Vec3::Z };
+    let dist = |d: Vec3| {
+        bvh.intersect(&Ray::new(p, d), f32::INFINITY)
+            .map(|h| h.t)
+            .unwrap_or(0.0)
+    };
+    let dir = if dist(axis) >= dist(-axis) {
+        axis
+    } else {
+        -axis
+    };
+    let origin = p - dir * 0.75 * dist(-dir);
+    let desc = CameraDesc {
+        origin: origin.into(),
+        target: (origin + dir).into(),
+        up: [0.0, 1.0, 0.0],
+        fov: 60.0,
+    };
+    let name = |d: Vec3| match (d.x, d.z) {
+        (x, _) if x > 0.5 => "+x",
+        (x, _) if x < -0.5 => "-x",
+        (_, z) if z > 0.5 => "+z",
+        _ => "-z",
+    };
+    let how = format!(
+        "default: inside the closed room, looking along {}",
+        name(dir)
+    );
+    DefaultCamera {
+        warning: Some(format!(
+            "no camera given, and the bounds enclose a closed room (the default camera outside would see only its walls): the camera is placed inside at ({:.3}, {:.3}, {:.3}) looking along {} ({}; `kalos info` prints it)",
+            origin.x,
+            origin.y,
+            origin.z,
+            name(dir),
+            "--camera ox,oy,oz,tx,ty,tz,ux,uy,uz,fov chooses another"
+        )),
+        desc,
+        how,
+    }
+}
+
+impl CameraDesc {
+    /// The camera as a `--camera` value.
+    pub fn to_arg(&self) -> String {
+        let v = [
+            self.origin[0],
+            self.origin[1],
+            self.origin[2],
+            self.target[0],
+            self.target[1],
+            self.target[2],
+            self.up[0],
+            self.up[1],
+            self.up[2],
+            self.fov,
+        ];
+        v.iter()
+            .map(|x| format!("{}", (x * 1e4).round() / 1e4))
+            .collect::<Vec<_>>()
+            .join(",")
     }
 }
 

@@ -7,8 +7,10 @@ pub mod camera;
 pub mod hit;
 pub mod mtl;
 pub mod obj;
+pub mod ply;
 pub mod texture;
 pub mod toml_scene;
+pub mod xml;
 
 pub use camera::{Camera, CameraDesc};
 pub use hit::SurfaceHit;
@@ -204,6 +206,9 @@ pub struct SceneInfo {
     pub bvh_seconds: f64,
     pub bvh_nodes: usize,
     pub bvh_bytes: usize,
+    /// The camera used when the command line gives none, and where it came from.
+    pub camera: Option<CameraDesc>,
+    pub camera_from: String,
 }
 
 /// The immutable scene the estimators render.
@@ -283,8 +288,28 @@ impl Scene {
         let bvh_seconds = t0.elapsed().as_secs_f64();
         let lights = Lights::new(&desc.positions, &desc.material, &materials);
         let bounds = desc.bounds();
-        let camera = desc.camera.unwrap_or_else(|| default_camera(&bounds));
         let mut warnings = desc.warnings;
+        let (camera, camera_how) = match desc.camera {
+            Some(c) => (c, "scene file".to_string()),
+            None => {
+                let mut lights: Vec<Vec3> = desc
+                    .positions
+                    .iter()
+                    .zip(&desc.material)
+                    .filter(|(_, &m)| {
+                        let m = &desc.materials[m as usize];
+                        m.ke != [0.0; 3] || m.emit_one_minus_albedo
+                    })
+                    .map(|(t, _)| (t[0] + t[1] + t[2]) / 3.0)
+                    .collect();
+                lights.extend(desc.point_lights.iter().map(|l| l.position));
+                let d = camera::default_camera(&bvh, &bounds, &lights, desc.environment.is_some());
+                if let Some(w) = d.warning {
+                    warnings.push(format!("scene {}: {w}", desc.name));
+                }
+                (d.desc, d.how)
+            }
+        };
         warnings.extend(material_warnings);
         if let Some(e) = &desc.environment {
             warnings.push(format!(
@@ -335,6 +360,8 @@ impl Scene {
             bvh_seconds,
             bvh_nodes: bvh.node_count(),
             bvh_bytes: bvh.memory_bytes(),
+            camera: Some(camera),
+            camera_from: camera_how,
         };
         Ok(Scene {
             tris: desc.positions,
@@ -370,24 +397,13 @@ fn describe_mtl(illum: u8, kd: [f32; 3], ks: [f32; 3]) -> &'static str {
     }
 }
 
-/// A camera on +z looking at the centre of the bounds, 45 degrees vertical.
+/// A camera on +z looking at the centre of the bounds (see `camera::framing_camera`).
 pub fn default_camera(b: &Bounds3) -> CameraDesc {
-    let (c, r) = if b.is_empty() {
-        (Vec3::ZERO, 1.0)
-    } else {
-        (b.centroid(), (b.diagonal() * 0.5).max(1e-3))
-    };
-    let fov = 45.0f32;
-    let dist = r / (fov.to_radians() * 0.5).tan() * 1.1;
-    CameraDesc {
-        origin: (c + Vec3::new(0.0, 0.0, dist)).into(),
-        target: c.into(),
-        up: [0.0, 1.0, 0.0],
-        fov,
-    }
+    camera::framing_camera(b)
 }
 
-/// Load a scene named on the command line: a built-in name, an `.obj` or a `.toml` file.
+/// Load a scene named on the command line: a built-in name, an `.obj`, a `.toml` or a
+/// Mitsuba `.xml` file.
 pub fn load(spec: &str) -> Result<Scene, String> {
     let t0 = Instant::now();
     let desc = load_desc(spec)?;
@@ -419,8 +435,9 @@ pub fn load_desc(spec: &str) -> Result<SceneDesc, String> {
             Ok(desc)
         }
         Some("toml") => toml_scene::load(path),
+        Some("xml") => xml::load(path),
         _ => Err(format!(
-            "{spec}: not a built-in scene ({}) nor an .obj or .toml file",
+            "{spec}: not a built-in scene ({}) nor an .obj, .toml or Mitsuba .xml file",
             builtin::NAMES.join(", ")
         )),
     }

@@ -1,4 +1,4 @@
-//! Image textures (map_Kd): PNG/JPEG decoded from sRGB to linear, bilinear lookup with
+//! Image textures (map_Kd): PNG/JPEG decoded from sRGB to linear, EXR/PFM as stored (linear), bilinear lookup with
 //! wrap-around, OBJ's v axis pointing up.
 
 use std::path::Path;
@@ -12,6 +12,20 @@ pub struct Texture {
 
 impl Texture {
     pub fn load(path: &Path) -> Result<Texture, String> {
+        // linear HDR images (Mitsuba scenes' bitmaps): EXR and PFM through image_io
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        if matches!(ext.as_deref(), Some("exr") | Some("pfm")) {
+            let img = crate::image_io::read_image(path)
+                .map_err(|e| format!("cannot read texture: {e}"))?;
+            return Ok(Texture {
+                width: img.width,
+                height: img.height,
+                texels: img.data,
+            });
+        }
         // through `input`: only regular files, within the input limit
         let bytes = crate::input::read_bytes(path)?;
         let img = crate::image_io::decode_8bit(&bytes)

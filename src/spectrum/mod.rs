@@ -12,7 +12,7 @@ mod tables;
 
 use std::ops::{Add, AddAssign, Div, Index, IndexMut, Mul, MulAssign, Sub};
 
-pub use tables::{band_range, SpectralTables};
+pub use tables::{band_range, cie_xyz, SpectralTables};
 
 /// Rec. 709 / sRGB luminance weights.
 pub const LUMINANCE_RGB: [f32; 3] = [0.2126, 0.7152, 0.0722];
