@@ -242,8 +242,15 @@ impl Scene {
                 }),
                 None => None,
             };
-            let (kd, ks, kd_texture, w) =
-                conserve_energy(m, kd_texture, &mut textures, &mut tex_paths);
+            let (kd, ks, kd_texture, w) = if m.model.is_some() {
+                // a surface model reads kd alone (plastic's base): Ks and illum are not its
+                let mut only_kd = m.clone();
+                only_kd.ks = [0.0; 3];
+                only_kd.illum = 2;
+                conserve_energy(&only_kd, kd_texture, &mut textures, &mut tex_paths)
+            } else {
+                conserve_energy(m, kd_texture, &mut textures, &mut tex_paths)
+            };
             if let Some(w) = w.filter(|w| !material_warnings.contains(w)) {
                 material_warnings.push(w);
             }
