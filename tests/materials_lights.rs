@@ -147,7 +147,7 @@ fn white_plastic_and_rough_interfaces_under_a_white_sky() {
                 specular: [1.0; 3],
                 alpha: 0.3,
             },
-            0.85,
+            0.8,
             1.005,
         ),
     ];
