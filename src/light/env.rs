@@ -320,6 +320,25 @@ mod tests {
     }
 
     #[test]
+    fn radiance_hdr_maps_are_read_linear() {
+        use image::codecs::hdr::HdrEncoder;
+        let (w, h) = (4usize, 3usize);
+        let px: Vec<image::Rgb<f32>> = (0..w * h)
+            .map(|i| image::Rgb([i as f32 * 0.5, 2.0, 0.125]))
+            .collect();
+        let mut bytes = Vec::new();
+        HdrEncoder::new(&mut bytes).encode(&px, w, h).unwrap();
+        let path = std::env::temp_dir().join(format!("kalos-env-{}.hdr", std::process::id()));
+        std::fs::write(&path, &bytes).unwrap();
+        let img = crate::image_io::read_image(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        assert_eq!((img.width, img.height), (4, 3));
+        // RGBE keeps 8 bits of mantissa: within 1%
+        assert!((img.get(3, 2)[0] - 5.5).abs() < 0.06 && (img.get(0, 0)[1] - 2.0).abs() < 0.02);
+        assert!(EnvLight::new([1.0; 3], Some(&img), Mat3::IDENTITY).is_ok());
+    }
+
+    #[test]
     fn bad_maps_are_refused() {
         let tiny = RgbImage::new(1, 1, vec![[1.0; 3]]);
         assert!(EnvLight::new([1.0; 3], Some(&tiny), Mat3::IDENTITY).is_err());

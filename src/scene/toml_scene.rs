@@ -382,7 +382,7 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
                 let p = super::mtl::normalise_path(dir, m);
                 crate::input::check_regular_file(&p, crate::input::max_input_bytes()?)
                     .map_err(|err| format!("{file}: [environment] map: {err}"))?;
-                crate::image_io::format_of(&p)
+                crate::image_io::check_readable(&p)
                     .map_err(|err| format!("{file}: [environment] map: {err}"))?;
                 Some(p)
             }
