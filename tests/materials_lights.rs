@@ -81,7 +81,13 @@ fn lossless_interfaces_under_a_white_sky_are_white() {
         alpha: 0.0,
     };
     for (name, m) in [
-        ("dielectric", SurfaceModel::Dielectric { eta: 1.5, alpha: 0.0 }),
+        (
+            "dielectric",
+            SurfaceModel::Dielectric {
+                eta: 1.5,
+                alpha: 0.0,
+            },
+        ),
         ("thindielectric", SurfaceModel::ThinDielectric { eta: 1.5 }),
         ("perfect conductor", perfect_mirror),
     ] {
@@ -98,7 +104,10 @@ fn lossless_interfaces_under_a_white_sky_are_white() {
             }
         }
         let (m, _) = mean_and_se(&film);
-        assert!(m.iter().all(|&v| (v - 1.0).abs() < 0.01), "{name}: image mean {m:?}");
+        assert!(
+            m.iter().all(|&v| (v - 1.0).abs() < 0.01),
+            "{name}: image mean {m:?}"
+        );
     }
 }
 
@@ -135,7 +144,10 @@ fn white_plastic_and_rough_interfaces_under_a_white_sky() {
         (
             "roughdielectric",
             // two rough crossings (bench/bsdf-vs-mitsuba.py: 0.84 at alpha 0.2 in both)
-            SurfaceModel::Dielectric { eta: 1.5, alpha: 0.3 },
+            SurfaceModel::Dielectric {
+                eta: 1.5,
+                alpha: 0.3,
+            },
             0.65,
             1.005,
         ),
@@ -157,7 +169,8 @@ fn white_plastic_and_rough_interfaces_under_a_white_sky() {
         set.integrator.max_depth = 64;
         let film = render_spp(&scene, &set, 256);
         let px = sphere_pixels(&film, 32);
-        let mean: f64 = px.iter().map(|p| (p[0] + p[1] + p[2]) / 3.0).sum::<f64>() / px.len() as f64;
+        let mean: f64 =
+            px.iter().map(|p| (p[0] + p[1] + p[2]) / 3.0).sum::<f64>() / px.len() as f64;
         assert!(
             mean > lo && mean < hi,
             "{name}: sphere mean {mean} outside [{lo}, {hi}]"
@@ -251,7 +264,11 @@ fn point_light_over_a_diffuse_plane() {
     let m = film.pixels[4 * 8 + 4].mean();
     for (c, kd) in [0.5, 0.25, 0.8].iter().enumerate() {
         let want = kd / std::f64::consts::PI * 2.0;
-        assert!((m[c] - want).abs() < 0.003 * want, "channel {c}: {} vs {want}", m[c]);
+        assert!(
+            (m[c] - want).abs() < 0.003 * want,
+            "channel {c}: {} vs {want}",
+            m[c]
+        );
     }
 }
 
@@ -278,7 +295,10 @@ fn estimators_without_distant_lights_refuse_them() {
         Integrator::prepare(&scene, s, 3, &Silent).err()
     };
     let e = try_(&|s| s.kind = IntegratorKind::Bdpt).expect("bdpt refuses");
-    assert!(e.contains("--integrator bdpt") && e.contains("environment"), "{e}");
+    assert!(
+        e.contains("--integrator bdpt") && e.contains("environment"),
+        "{e}"
+    );
     let e = try_(&|s| s.kind = IntegratorKind::Radiosity).expect("radiosity refuses");
     assert!(e.contains("radiosity"), "{e}");
     let e = try_(&|s| s.roulette.mode = RrMode::Estimate).expect("estimate refuses");
@@ -291,7 +311,11 @@ fn estimators_without_distant_lights_refuse_them() {
 fn toml_models_and_lights_parse_and_bad_ones_are_one_line_errors() {
     let dir = std::env::temp_dir().join(format!("kalos-toml-models-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("t.obj"), "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n").unwrap();
+    std::fs::write(
+        dir.join("t.obj"),
+        "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n",
+    )
+    .unwrap();
     std::fs::write(dir.join("t.mtl"), "newmtl m\nKd 0.5 0.5 0.5\n").unwrap();
     let parse = |body: &str| {
         let text = format!("[[objects]]\nfile = \"t.obj\"\n{body}");
@@ -313,13 +337,21 @@ fn toml_models_and_lights_parse_and_bad_ones_are_one_line_errors() {
     assert!(scene.lights.env().is_some());
     for (body, want) in [
         ("[materials.m]\nmodel = { type = \"hair\" }\n", "s.toml:"),
-        ("[materials.m]\nmodel = { type = \"plastic\", eta = 1.0 }\n", "eta 1"),
-        ("[materials.m]\nmodel = { type = \"roughdielectric\", alpha = 0 }\n", "alpha"),
+        (
+            "[materials.m]\nmodel = { type = \"plastic\", eta = 1.0 }\n",
+            "eta 1",
+        ),
+        (
+            "[materials.m]\nmodel = { type = \"roughdielectric\", alpha = 0 }\n",
+            "alpha",
+        ),
         ("[environment]\nmap = \"missing.exr\"\n", "missing.exr"),
         ("[environment]\nradiance = [1, -1, 1]\n", "radiance"),
         ("[[point_lights]]\nposition = [0, 0, 0]\n", "s.toml:"),
     ] {
-        let e = parse(body).err().unwrap_or_else(|| panic!("{body}: accepted"));
+        let e = parse(body)
+            .err()
+            .unwrap_or_else(|| panic!("{body}: accepted"));
         assert!(e.contains(want) && !e.contains('\n'), "{body}: {e}");
     }
     // an environment map that is not an image: a one-line error when the scene is built

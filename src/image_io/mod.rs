@@ -236,16 +236,17 @@ pub fn read_image(path: &Path) -> Result<RgbImage, String> {
     let fail = |e: &dyn std::fmt::Display| format!("{}: cannot read image: {e}", path.display());
     if is_hdr(path) {
         let bytes = crate::input::read_bytes(path)?;
-        let im = image::ImageReader::with_format(
-            std::io::Cursor::new(&bytes),
-            image::ImageFormat::Hdr,
-        )
-        .decode()
-        .map_err(|e| fail(&e))?
-        .to_rgb32f();
+        let im =
+            image::ImageReader::with_format(std::io::Cursor::new(&bytes), image::ImageFormat::Hdr)
+                .decode()
+                .map_err(|e| fail(&e))?
+                .to_rgb32f();
         let (w, h) = im.dimensions();
         if w == 0 || h == 0 {
-            return Err(format!("{}: the image is {w}x{h}: it has no pixels", path.display()));
+            return Err(format!(
+                "{}: the image is {w}x{h}: it has no pixels",
+                path.display()
+            ));
         }
         let data = im.pixels().map(|p| [p[0], p[1], p[2]]).collect();
         return Ok(RgbImage::new(w, h, data));

@@ -207,7 +207,10 @@ impl Integrator {
             ));
         }
         if scene.lights.has_distant() {
-            let what = match (scene.lights.env().is_some(), scene.lights.points().is_empty()) {
+            let what = match (
+                scene.lights.env().is_some(),
+                scene.lights.points().is_empty(),
+            ) {
                 (true, true) => "an environment light",
                 (true, false) => "an environment and point lights",
                 _ => "point lights",

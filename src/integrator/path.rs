@@ -188,7 +188,9 @@ pub fn next_event<const N: usize>(
     let u_area = match scene.lights.choose(u_sel) {
         None => return Spectrum::ZERO,
         Some(crate::light::Chosen::Area(u)) => u,
-        Some(k) => return next_event_distant(scene, p, ng, frame, wo_l, bsdf, sel, k, u_light, beta, c),
+        Some(k) => {
+            return next_event_distant(scene, p, ng, frame, wo_l, bsdf, sel, k, u_light, beta, c)
+        }
     };
     let Some(ls) = scene.lights.sample_position(u_area, u_light) else {
         return Spectrum::ZERO;
@@ -294,7 +296,10 @@ fn next_event_distant<const N: usize>(
                 return Spectrum::ZERO;
             }
             c.rays += 1;
-            if scene.bvh.occluded(&Ray::new(offset_origin(p, ng, wi), wi), f32::INFINITY) {
+            if scene
+                .bvh
+                .occluded(&Ray::new(offset_origin(p, ng, wi), wi), f32::INFINITY)
+            {
                 return Spectrum::ZERO;
             }
             let w = power_heuristic(pdf_light, sel.pdf(bsdf, wo_l, wi_l));

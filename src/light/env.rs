@@ -70,7 +70,11 @@ impl EnvMap {
                 "the environment map is {w}x{h}: it needs at least 2x3 pixels"
             ));
         }
-        if img.data.iter().any(|p| p.iter().any(|v| !v.is_finite() || *v < 0.0)) {
+        if img
+            .data
+            .iter()
+            .any(|p| p.iter().any(|v| !v.is_finite() || *v < 0.0))
+        {
             return Err("the environment map has negative or non-finite pixels".into());
         }
         let texels = img.data.clone();
@@ -81,7 +85,11 @@ impl EnvMap {
             let sin_t = ((j as f32 + 0.5) / (h - 1) as f32 * PI).sin();
             let cells: Vec<f32> = (0..w)
                 .map(|i| {
-                    l(i, j).max(l(i + 1, j)).max(l(i, j + 1)).max(l(i + 1, j + 1)) * sin_t
+                    l(i, j)
+                        .max(l(i + 1, j))
+                        .max(l(i, j + 1))
+                        .max(l(i + 1, j + 1))
+                        * sin_t
                 })
                 .collect();
             row_w.push(cells.iter().sum::<f32>());
@@ -266,7 +274,11 @@ mod tests {
 
     #[test]
     fn mitsuba_uv_convention_round_trips() {
-        for uv in [Vec2::new(0.1, 0.2), Vec2::new(0.75, 0.9), Vec2::new(0.5, 0.5)] {
+        for uv in [
+            Vec2::new(0.1, 0.2),
+            Vec2::new(0.75, 0.9),
+            Vec2::new(0.5, 0.5),
+        ] {
             let (d, _) = uv_to_direction(uv);
             let back = direction_to_uv(d);
             assert!((back - uv).length() < 1e-5, "{uv} -> {d} -> {back}");
@@ -306,12 +318,11 @@ mod tests {
         let n = 400_000;
         let (mut a, mut b) = (0.0f64, 0.0f64);
         for _ in 0..n {
-            if let Some((d, p, le)) = env.sample(rng.next_2d()) {
+            if let Some((_, p, le)) = env.sample(rng.next_2d()) {
                 a += (lum(le) / p) as f64;
             }
             let d = square_to_uniform_sphere(rng.next_2d());
             b += (lum(env.eval(d)) / PDF_UNIFORM_SPHERE) as f64;
-            let _ = d;
         }
         let (a, b) = (a / n as f64, b / n as f64);
         assert!((a - b).abs() < 0.01 * b, "importance {a} vs uniform {b}");

@@ -68,11 +68,7 @@ impl Conductor {
     /// specular F(cos) per RGB channel.
     #[inline]
     pub fn reflectance(&self, cos: f32) -> [f32; 3] {
-        let mut r = [0.0; 3];
-        for c in 0..3 {
-            r[c] = self.specular[c] * fresnel_conductor(cos, self.eta[c], self.k[c]);
-        }
-        r
+        std::array::from_fn(|c| self.specular[c] * fresnel_conductor(cos, self.eta[c], self.k[c]))
     }
 
     /// f(wo, wi) of the rough conductor (0 for the smooth one: a Dirac lobe).

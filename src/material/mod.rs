@@ -186,9 +186,7 @@ impl Bsdf {
     #[inline]
     pub fn is_delta(&self) -> bool {
         match self {
-            Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Black | Bsdf::ThinDielectric(_) => {
-                true
-            }
+            Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Black | Bsdf::ThinDielectric(_) => true,
             Bsdf::Conductor(c) => c.is_smooth(),
             _ => false,
         }
@@ -229,9 +227,7 @@ impl Bsdf {
             Bsdf::Diffuse(l) => ([Lobe::Diffuse(l), zero], 1),
             Bsdf::DiffuseGlossy(l, p) => ([Lobe::Diffuse(l), Lobe::Glossy(p)], 2),
             Bsdf::Conductor(c) if !c.is_smooth() => ([Lobe::Conductor(c), zero], 1),
-            Bsdf::Plastic(p) if !p.is_smooth() => {
-                ([Lobe::PlasticBase(p), Lobe::PlasticCoat(p)], 2)
-            }
+            Bsdf::Plastic(p) if !p.is_smooth() => ([Lobe::PlasticBase(p), Lobe::PlasticCoat(p)], 2),
             // smooth coats and transmission are no elementary reflection lobes: the
             // lobe-selection methods fall back to the mixture there
             _ => ([zero, zero], 0),

@@ -75,10 +75,7 @@ pub fn rough_coat_rt(ggx: &Ggx, eta: f32, mu: f32, n: usize) -> (f64, f64) {
     let (mut r, mut t) = (0.0f64, 0.0f64);
     for i in 0..n {
         for j in 0..n {
-            let u = Vec2::new(
-                (i as f32 + 0.5) / n as f32,
-                (j as f32 + 0.5) / n as f32,
-            );
+            let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
             let m = ggx.sample_visible(wo, u);
             let c = wo.dot(m);
             let (f, cos_t, eta_r) = fresnel_dielectric(c, eta);
@@ -114,7 +111,11 @@ impl CoatTable {
                 *ti = t_ext as f32;
                 // Mitsuba: r_int = 2 mean over the nodes of R_int(mu) mu
                 r_int += r_in * mu.max(1e-6) as f64 / COAT_RES as f64 * 2.0;
-                let w = if i == 0 || i == COAT_RES - 1 { 0.5 } else { 1.0 };
+                let w = if i == 0 || i == COAT_RES - 1 {
+                    0.5
+                } else {
+                    1.0
+                };
                 t_hem += 2.0 * w * h * mu as f64 * t_ext;
                 r_hem += 2.0 * w * h * mu as f64 * r_ext;
             }
@@ -148,7 +149,7 @@ impl CoatTable {
         }
         // computed outside the lock (a few ms); a race computes it twice, harmlessly
         let table: &'static CoatTable = Box::leak(Box::new(CoatTable::compute(eta, alpha)));
-        *cache.lock().unwrap().entry(key).or_insert(table)
+        cache.lock().unwrap().entry(key).or_insert(table)
     }
 
     /// t(mu): the probability of crossing the coat at incidence cosine mu.

@@ -5,10 +5,10 @@
 //!
 //! With eta_o, eta_i the indices on the sides of wo and wi:
 //! - reflection (wo, wi on one side): h_r = sign(cos theta_o) (wo + wi) / |wo + wi|,
-//!     f_r = F(wo.h_r) D(h_r) G(wo, wi, h_r) / (4 |cos theta_o| |cos theta_i|);
+//!   f_r = F(wo.h_r) D(h_r) G(wo, wi, h_r) / (4 |cos theta_o| |cos theta_i|);
 //! - refraction: h_t = -(eta_o wo + eta_i wi) / |..| turned to +z,
-//!     f_t = |wi.h_t| |wo.h_t| eta_o^2 (1 - F(wo.h_t)) D(h_t) G(wo, wi, h_t)
-//!           / (|cos theta_i| |cos theta_o| (eta_i wi.h_t + eta_o wo.h_t)^2)
+//!   f_t = |wi.h_t| |wo.h_t| eta_o^2 (1 - F(wo.h_t)) D(h_t) G(wo, wi, h_t)
+//!   / (|cos theta_i| |cos theta_o| (eta_i wi.h_t + eta_o wo.h_t)^2)
 //!   (Walter's eq. 21 with the light arriving along wi and leaving along wo: it carries
 //!   radiance, scaled by (eta_o / eta_i)^2 across the interface; importance is not, and
 //!   the light subpaths of BDPT undo the factor, see `Bsdf::adjoint_scale`).
@@ -95,8 +95,7 @@ impl RoughDielectric {
         } else {
             // eta_o = 1 and eta_i = eta_io in units of eta_o
             let den = c.eta_io * wi.dot(c.h) + wo.dot(c.h);
-            (wi.dot(c.h) * wo.dot(c.h)).abs() * (1.0 - f) * dg
-                / ((wi.z * wo.z).abs() * den * den)
+            (wi.dot(c.h) * wo.dot(c.h)).abs() * (1.0 - f) * dg / ((wi.z * wo.z).abs() * den * den)
         };
         Spectrum::splat(v)
     }
@@ -145,7 +144,7 @@ impl RoughDielectric {
             wi
         };
         let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         let f = self.eval::<N>(wo, wi);

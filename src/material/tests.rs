@@ -301,7 +301,10 @@ fn microfacet_bsdfs() -> Vec<(&'static str, Bsdf)> {
         ("gold a=0.3", gold(0.3)),
         ("gold a=1", gold(1.0)),
         ("rough plastic a=0.15", rough_plastic(0.5, 0.15, false)),
-        ("rough plastic a=0.4 nonlinear", rough_plastic(0.8, 0.4, true)),
+        (
+            "rough plastic a=0.4 nonlinear",
+            rough_plastic(0.8, 0.4, true),
+        ),
         ("smooth plastic", rough_plastic(0.5, 0.0, false)),
         (
             "glass a=0.2",
@@ -406,7 +409,11 @@ fn microfacet_sample_weight_is_f_cos_over_pdf() {
                         expect
                     );
                 }
-                assert!((s.pdf - pdf).abs() <= 2e-3 * pdf, "{name}: pdf {} vs {pdf}", s.pdf);
+                assert!(
+                    (s.pdf - pdf).abs() <= 2e-3 * pdf,
+                    "{name}: pdf {} vs {pdf}",
+                    s.pdf
+                );
             }
             assert!(seen > 500, "{name}: only {seen} non-Dirac samples");
         }
@@ -476,7 +483,11 @@ fn microfacet_white_furnace() {
     let cases: Vec<(&str, Bsdf, Option<f64>)> = vec![
         // F = 1: the smooth perfect conductor reflects everything
         ("perfect conductor", white_metal(0.0), Some(1.0)),
-        ("perfect rough conductor a=0.01", white_metal(0.01), Some(1.0)),
+        (
+            "perfect rough conductor a=0.01",
+            white_metal(0.01),
+            Some(1.0),
+        ),
         ("perfect rough conductor a=0.5", white_metal(0.5), None),
         ("perfect rough conductor a=1", white_metal(1.0), None),
         // eta = 1, k = 0: no interface, F = 0, nothing reflected
@@ -491,8 +502,16 @@ fn microfacet_white_furnace() {
             Some(0.0),
         ),
         ("gold a=0.3", gold(0.3), None),
-        ("smooth dielectric", Bsdf::Dielectric(Dielectric { eta: 1.5 }), Some(1.0)),
-        ("thin dielectric", Bsdf::ThinDielectric(ThinDielectric { eta: 1.5 }), Some(1.0)),
+        (
+            "smooth dielectric",
+            Bsdf::Dielectric(Dielectric { eta: 1.5 }),
+            Some(1.0),
+        ),
+        (
+            "thin dielectric",
+            Bsdf::ThinDielectric(ThinDielectric { eta: 1.5 }),
+            Some(1.0),
+        ),
         (
             "rough dielectric a=0.01",
             Bsdf::RoughDielectric(RoughDielectric {
@@ -519,7 +538,10 @@ fn microfacet_white_furnace() {
         for &inside in sides(b) {
             for deg in [0.0f32, 30.0, 60.0, 85.0] {
                 let (a, se) = energy(b, wo_side(deg, inside), 100_000, 41);
-                assert!(a <= 1.0 + 4.0 * se + 1e-4, "{name} at {deg}: albedo {a} > 1");
+                assert!(
+                    a <= 1.0 + 4.0 * se + 1e-4,
+                    "{name} at {deg}: albedo {a} > 1"
+                );
                 if let Some(e) = exact {
                     // grazing angles lose a little to shadowing even at small roughness
                     let tol = if deg > 80.0 { 0.02 } else { 2e-3 };
@@ -536,7 +558,10 @@ fn microfacet_white_furnace() {
     let b = Bsdf::Plastic(Plastic::new([1.0; 3], [1.0; 3], 1.5, 0.0, false));
     for deg in [0.0f32, 45.0, 80.0] {
         let (a, se) = energy(&b, wo_at(deg), 200_000, 43);
-        assert!((a - 1.0).abs() < 5e-3 + 4.0 * se, "white smooth plastic at {deg}: {a}");
+        assert!(
+            (a - 1.0).abs() < 5e-3 + 4.0 * se,
+            "white smooth plastic at {deg}: {a}"
+        );
     }
 }
 
@@ -586,10 +611,18 @@ fn plastic_coat_tables() {
     let t = CoatTable::get(1.5, 0.002);
     for mu in [0.2f32, 0.5, 0.9, 1.0] {
         let want = 1.0 - dielectric::fresnel_dielectric(mu, 1.5).0;
-        assert!((t.transmittance(mu) - want).abs() < 3e-3, "t({mu}) {} vs {want}", t.transmittance(mu));
+        assert!(
+            (t.transmittance(mu) - want).abs() < 3e-3,
+            "t({mu}) {} vs {want}",
+            t.transmittance(mu)
+        );
     }
     let fdr = fresnel_diffuse_reflectance(1.0 / 1.5);
-    assert!((t.r_int - fdr).abs() < 0.01, "r_int {} vs Fdr {fdr}", t.r_int);
+    assert!(
+        (t.r_int - fdr).abs() < 0.01,
+        "r_int {} vs Fdr {fdr}",
+        t.r_int
+    );
     // the fits against the integral 2 int F mu dmu
     for eta in [1.33f32, 1.5, 1.0 / 1.5] {
         let n = 20000;
@@ -600,10 +633,16 @@ fn plastic_coat_tables() {
             })
             .sum();
         let fit = fresnel_diffuse_reflectance(eta) as f64;
-        assert!((fit - exact).abs() < 0.01 * exact.max(0.05), "eta {eta}: fit {fit} vs {exact}");
+        assert!(
+            (fit - exact).abs() < 0.01 * exact.max(0.05),
+            "eta {eta}: fit {fit} vs {exact}"
+        );
     }
     // the cache hands out one table per (eta, alpha)
-    assert!(std::ptr::eq(CoatTable::get(1.5, 0.3), CoatTable::get(1.5, 0.3)));
+    assert!(std::ptr::eq(
+        CoatTable::get(1.5, 0.3),
+        CoatTable::get(1.5, 0.3)
+    ));
 }
 
 #[test]

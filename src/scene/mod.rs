@@ -389,7 +389,9 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             alpha,
         } => {
             if !(finite(&eta) && finite(&k) && finite(&specular)) {
-                return Err("eta, k and specular_reflectance must be finite and non-negative".into());
+                return Err(
+                    "eta, k and specular_reflectance must be finite and non-negative".into(),
+                );
             }
             if !alpha_ok(alpha) {
                 return Err(format!("alpha {alpha}: must be in [0, 4]"));
@@ -408,10 +410,14 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             nonlinear,
         } => {
             if !eta_ok(eta) {
-                return Err(format!("eta {eta}: the indices inside and outside must be positive and differ"));
+                return Err(format!(
+                    "eta {eta}: the indices inside and outside must be positive and differ"
+                ));
             }
             if !(finite(&specular) && finite(&kd)) {
-                return Err("diffuse and specular reflectance must be finite and non-negative".into());
+                return Err(
+                    "diffuse and specular reflectance must be finite and non-negative".into(),
+                );
             }
             if !alpha_ok(alpha) {
                 return Err(format!("alpha {alpha}: must be in [0, 4]"));
@@ -420,7 +426,9 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
         }
         SurfaceModel::Dielectric { eta, alpha } => {
             if !eta_ok(eta) {
-                return Err(format!("eta {eta}: the indices inside and outside must be positive and differ"));
+                return Err(format!(
+                    "eta {eta}: the indices inside and outside must be positive and differ"
+                ));
             }
             if !alpha_ok(alpha) {
                 return Err(format!("alpha {alpha}: must be in [0, 4]"));
@@ -450,16 +458,13 @@ fn environment_light(e: &EnvironmentDesc) -> Result<crate::light::EnvLight, Stri
         .unwrap_or_default();
     let img = match &e.map {
         Some(p) => Some(
-            crate::image_io::read_image(p)
-                .map_err(|err| format!("{at}environment map: {err}"))?,
+            crate::image_io::read_image(p).map_err(|err| format!("{at}environment map: {err}"))?,
         ),
         None => None,
     };
-    crate::light::EnvLight::new(e.radiance, img.as_ref(), e.to_world).map_err(|err| {
-        match &e.map {
-            Some(p) => format!("{at}environment map {}: {err}", p.display()),
-            None => format!("{at}environment: {err}"),
-        }
+    crate::light::EnvLight::new(e.radiance, img.as_ref(), e.to_world).map_err(|err| match &e.map {
+        Some(p) => format!("{at}environment map {}: {err}", p.display()),
+        None => format!("{at}environment: {err}"),
     })
 }
 

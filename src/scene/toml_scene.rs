@@ -180,7 +180,7 @@ impl ModelSection {
             ModelSection::RoughConductor { alpha: Some(a), .. }
             | ModelSection::RoughPlastic { alpha: Some(a), .. }
             | ModelSection::RoughDielectric { alpha: Some(a), .. }
-                if !(a > 0.0) =>
+                if a.is_nan() || a <= 0.0 =>
             {
                 Err(format!(
                     "alpha {a}: a rough model needs alpha > 0 (use the smooth model for 0)"
@@ -369,7 +369,9 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
         }
         let r = e.rotate.unwrap_or([0.0; 3]);
         if r.iter().any(|v| !v.is_finite()) {
-            return Err(format!("{file}: [environment] rotate: values must be finite"));
+            return Err(format!(
+                "{file}: [environment] rotate: values must be finite"
+            ));
         }
         let q = Quat::from_euler(
             EulerRot::ZYX,
