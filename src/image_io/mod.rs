@@ -210,10 +210,47 @@ pub fn decode_8bit(bytes: &[u8]) -> Result<image::DynamicImage, String> {
         .map_err(|e| e.to_string())
 }
 
-/// Read an EXR (first RGB(A) layer), PFM or PNG (sRGB-decoded) as linear RGB. Images
-/// without pixels (0 x h, w x 0) are refused.
+/// Whether `path` names an image `read_image` reads: EXR, PFM, PNG, or Radiance HDR
+/// (read only: environment maps).
+pub fn check_readable(path: &Path) -> Result<(), String> {
+    if is_hdr(path) {
+        return Ok(());
+    }
+    format_of(path).map(|_| ()).map_err(|_| {
+        format!(
+            "{}: unknown image extension (use .exr, .hdr, .pfm or .png)",
+            path.display()
+        )
+    })
+}
+
+fn is_hdr(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("hdr"))
+}
+
+/// Read an EXR (first RGB(A) layer), PFM, PNG (sRGB-decoded) or Radiance HDR (linear) as
+/// linear RGB. Images without pixels (0 x h, w x 0) are refused.
 pub fn read_image(path: &Path) -> Result<RgbImage, String> {
     let fail = |e: &dyn std::fmt::Display| format!("{}: cannot read image: {e}", path.display());
+    if is_hdr(path) {
+        let bytes = crate::input::read_bytes(path)?;
+        let im =
+            image::ImageReader::with_format(std::io::Cursor::new(&bytes), image::ImageFormat::Hdr)
+                .decode()
+                .map_err(|e| fail(&e))?
+                .to_rgb32f();
+        let (w, h) = im.dimensions();
+        if w == 0 || h == 0 {
+            return Err(format!(
+                "{}: the image is {w}x{h}: it has no pixels",
+                path.display()
+            ));
+        }
+        let data = im.pixels().map(|p| [p[0], p[1], p[2]]).collect();
+        return Ok(RgbImage::new(w, h, data));
+    }
     let format = format_of(path)?;
     let bytes = crate::input::read_bytes(path)?;
     let img = match format {

@@ -19,9 +19,12 @@
 //!
 //! Adjoint transport (Veach 5.3): on the light subpath the BSDF sample weight is corrected
 //! for shading normals, |w_o . n_s| |w_i . n_g| / (|w_o . n_g| |w_i . n_s|), and the
-//! dielectric's radiance scaling (eta_t / eta_i)^2 is undone on refractions (importance is
-//! not scaled). `material::Dielectric::sample` always applies the radiance scaling; the
-//! material module belongs to another developer, so the undoing is done here.
+//! dielectrics' radiance scaling (eta_t / eta_i)^2 is undone on refractions (importance is
+//! not scaled): the BSDFs' `sample` always carries radiance, `Bsdf::adjoint_scale` turns
+//! a smooth or rough refraction's weight into importance. Connections evaluate f with the
+//! radiance-side direction first, which is the path's own value (no correction there).
+//! Rough dielectrics transmit (`Bsdf::transmits`): their vertices connect through the
+//! surface too.
 //!
 //! Depth follows Mitsuba's max_depth on the full path: a path of s + t vertices has
 //! s + t - 1 segments, allowed if <= max_depth. Russian roulette is `integrator::rr`'s on
@@ -39,7 +42,6 @@
 
 use super::rr::{RrMode, Step};
 use super::{Counters, IntegratorSettings};
-use crate::material::dielectric::fresnel_dielectric;
 use crate::material::Bsdf;
 use crate::math::{offset_origin, Frame, Ray, Vec2, Vec3};
 use crate::sampling::SampleStream;
@@ -234,6 +236,14 @@ impl<const N: usize> Vertex<N> {
     fn f(&self, wo: Vec3, wi: Vec3) -> Spectrum<N> {
         let (ng, _, frame) = self.oriented(wo);
         let (wo_l, wi_l) = (frame.to_local(wo), frame.to_local(wi));
+        if self.bsdf.transmits() {
+            // each direction on one side for both normals, either side of the surface
+            let side = |w: Vec3, l: Vec3| (w.dot(ng) > 0.0) == (l.z > 0.0) && l.z != 0.0;
+            if !(side(wo, wo_l) && side(wi, wi_l)) {
+                return Spectrum::ZERO;
+            }
+            return self.bsdf.eval::<N>(wo_l, wi_l);
+        }
         if wo.dot(ng) <= 0.0 || wi.dot(ng) <= 0.0 || wo_l.z <= 0.0 || wi_l.z <= 0.0 {
             return Spectrum::ZERO;
         }
@@ -247,7 +257,7 @@ impl<const N: usize> Vertex<N> {
             return 0.0;
         }
         let (ng, _, frame) = self.oriented(w_from);
-        if w_to.dot(ng) <= 0.0 {
+        if w_to.dot(ng) <= 0.0 && !self.bsdf.transmits() {
             return 0.0;
         }
         self.bsdf.pdf(frame.to_local(w_from), frame.to_local(w_to))
@@ -382,12 +392,9 @@ fn random_walk<const N: usize>(
             }
             weight *= wo.dot(ns).abs() * wi.dot(ng).abs() / den;
             // Importance is not scaled by (eta_t / eta_i)^2: undo the radiance scaling
-            // `Dielectric::sample` applies on refraction.
-            if let Bsdf::Dielectric(d) = bsdf {
-                if bs.wi.z * wo_l.z < 0.0 {
-                    let eta_r = fresnel_dielectric(wo_l.z, d.eta).2;
-                    weight *= 1.0 / (eta_r * eta_r);
-                }
+            // the dielectrics' `sample` applies on refraction.
+            if matches!(bsdf, Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_)) {
+                weight *= bsdf.adjoint_scale(wo_l, bs.wi);
             }
         }
         beta *= weight;
@@ -396,7 +403,7 @@ fn random_walk<const N: usize>(
         } else {
             (
                 bsdf.pdf(wo_l, bs.wi),
-                if wo.dot(ng) > 0.0 {
+                if wo.dot(ng) > 0.0 || bsdf.transmits() {
                     bsdf.pdf(bs.wi, wo_l)
                 } else {
                     0.0

@@ -212,6 +212,32 @@ impl Integrator {
                  (--rr classic|spectral)"
             ));
         }
+        if scene.lights.has_distant() {
+            let what = match (
+                scene.lights.env().is_some(),
+                scene.lights.points().is_empty(),
+            ) {
+                (true, true) => "an environment light",
+                (true, false) => "an environment and point lights",
+                _ => "point lights",
+            };
+            if set.kind == IntegratorKind::Bdpt {
+                return Err(format!(
+                    "--integrator bdpt: the scene has {what}, which BDPT does not support yet; use --integrator path"
+                ));
+            }
+            if set.kind == IntegratorKind::Radiosity || set.gather == Gather::Radiosity {
+                return Err(format!(
+                    "--integrator radiosity / --gather radiosity: the scene has {what}, which the radiosity solution does not support; use --integrator path with --gather off"
+                ));
+            }
+            if set.roulette.mode.uses_estimate() {
+                return Err(format!(
+                    "--rr {}: the radiance estimate L~ counts area lights only and the scene has {what}; use --rr classic or --rr spectral",
+                    crate::options::name(&set.roulette.mode)
+                ));
+            }
+        }
         if set.gather_depth == 0 {
             return Err("--gather-depth: must be at least 1 (the first diffuse bounce)".into());
         }

@@ -9,6 +9,10 @@
 //! Every roulette and lobe-selection decision is `integrator::rr`'s: at each reflection the
 //! path asks it for a `Selection` (from the throughput F so far), weighs next-event
 //! estimation against the selection's density, and lets it decide the continuation.
+//!
+//! Lights: area lights and the environment are reached both ways (next-event estimation
+//! and BSDF sampling, MIS-weighted; a ray that leaves the scene sees the environment);
+//! point lights are Dirac, reached by next-event estimation alone.
 
 use super::rr::Step;
 use super::{Counters, IntegratorSettings};
@@ -42,6 +46,9 @@ pub fn radiance<const N: usize>(
     loop {
         c.rays += 1;
         let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
+            if let Some(env) = scene.lights.env() {
+                l += beta * escaped::<N>(scene, env, ray.d, prev_pdf, prev_delta);
+            }
             break;
         };
         segments += 1;
@@ -140,6 +147,25 @@ pub fn sample_pixel<const N: usize>(
     radiance::<N>(scene, ray, s, set, &Spectrum::ZERO, c).to_rgb()
 }
 
+/// The environment's radiance along an escaping ray of direction `d`, MIS-weighted
+/// (power heuristic) against its own sampling if the ray came from a non-Dirac sample of
+/// density `prev_pdf`. (Out of line: scenes without an environment never call it.)
+#[inline(never)]
+pub fn escaped<const N: usize>(
+    scene: &Scene,
+    env: &crate::light::EnvLight,
+    d: crate::math::Vec3,
+    prev_pdf: f32,
+    prev_delta: bool,
+) -> Spectrum<N> {
+    let le = Spectrum::<N>::from_rgb(env.eval(d));
+    if prev_delta {
+        return le;
+    }
+    let pdf_light = env.pdf(d) * scene.lights.pmf_env();
+    le * power_heuristic(prev_pdf, pdf_light)
+}
+
 /// Next-event estimation at a non-delta vertex: a point sampled on the lights, its
 /// visibility, MIS-weighted (power heuristic) against the roulette's selection density.
 /// Returns beta f Le w / p_light (zero if the point is not seen). Shared by the path
@@ -159,7 +185,14 @@ pub fn next_event<const N: usize>(
     beta: &Spectrum<N>,
     c: &mut Counters,
 ) -> Spectrum<N> {
-    let Some(ls) = scene.lights.sample_position(u_sel, u_light) else {
+    let u_area = match scene.lights.choose(u_sel) {
+        None => return Spectrum::ZERO,
+        Some(crate::light::Chosen::Area(u)) => u,
+        Some(k) => {
+            return next_event_distant(scene, p, ng, frame, wo_l, bsdf, sel, k, u_light, beta, c)
+        }
+    };
+    let Some(ls) = scene.lights.sample_position(u_area, u_light) else {
         return Spectrum::ZERO;
     };
     let d = ls.p - p;
@@ -168,10 +201,10 @@ pub fn next_event<const N: usize>(
     let wi = d / dist;
     let cos_l = -wi.dot(ls.n);
     let wi_l = frame.to_local(wi);
-    if !(cos_l > 0.0 && wi_l.z > 0.0 && wi.dot(ng) > 0.0) {
+    if !(cos_l > 0.0 && facing(bsdf, wi, wi_l, ng)) {
         return Spectrum::ZERO;
     }
-    let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z;
+    let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z.abs();
     if f.is_black() {
         return Spectrum::ZERO;
     }
@@ -185,4 +218,92 @@ pub fn next_event<const N: usize>(
     let w = power_heuristic(pdf_light, sel.pdf(bsdf, wo_l, wi_l));
     let le = ls.emitted(&scene.lights, cos_l);
     *beta * f * Spectrum::from_rgb(le) * (w / pdf_light)
+}
+
+/// May light arrive from `wi` (world; `wi_l` in the shading frame)? On the side of the
+/// geometric and the shading normal alike, and on the front unless the BSDF transmits.
+#[inline(always)]
+fn facing(
+    bsdf: &crate::material::Bsdf,
+    wi: crate::math::Vec3,
+    wi_l: crate::math::Vec3,
+    ng: crate::math::Vec3,
+) -> bool {
+    if wi_l.z > 0.0 {
+        wi.dot(ng) > 0.0
+    } else {
+        bsdf.transmits() && wi_l.z < 0.0 && wi.dot(ng) < 0.0
+    }
+}
+
+/// Next-event estimation to a point light (Dirac: no MIS) or the environment (MIS against
+/// the roulette's selection density). `kind` is what `Lights::choose` picked.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn next_event_distant<const N: usize>(
+    scene: &Scene,
+    p: crate::math::Vec3,
+    ng: crate::math::Vec3,
+    frame: &Frame,
+    wo_l: crate::math::Vec3,
+    bsdf: &crate::material::Bsdf,
+    sel: &super::rr::Selection,
+    kind: crate::light::Chosen,
+    u_light: glam::Vec2,
+    beta: &Spectrum<N>,
+    c: &mut Counters,
+) -> Spectrum<N> {
+    use crate::light::Chosen;
+    match kind {
+        Chosen::Area(_) => Spectrum::ZERO,
+        Chosen::Point(i, pmf) => {
+            let pl = scene.lights.points()[i];
+            let d = pl.p - p;
+            let dist2 = d.length_squared();
+            if dist2 <= 0.0 || pmf <= 0.0 {
+                return Spectrum::ZERO;
+            }
+            let wi = d / dist2.sqrt();
+            let wi_l = frame.to_local(wi);
+            if !facing(bsdf, wi, wi_l, ng) {
+                return Spectrum::ZERO;
+            }
+            let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z.abs();
+            if f.is_black() {
+                return Spectrum::ZERO;
+            }
+            let o = offset_origin(p, ng, wi);
+            c.rays += 1;
+            if scene.bvh.occluded(&Ray::new(o, pl.p - o), 1.0 - 1e-4) {
+                return Spectrum::ZERO;
+            }
+            *beta * f * Spectrum::from_rgb(pl.intensity) * (1.0 / (dist2 * pmf))
+        }
+        Chosen::Env(pmf) => {
+            let Some(env) = scene.lights.env() else {
+                return Spectrum::ZERO;
+            };
+            let Some((wi, pdf, le)) = env.sample(u_light) else {
+                return Spectrum::ZERO;
+            };
+            let pdf_light = pdf * pmf;
+            let wi_l = frame.to_local(wi);
+            if !(pdf_light > 0.0 && facing(bsdf, wi, wi_l, ng)) {
+                return Spectrum::ZERO;
+            }
+            let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z.abs();
+            if f.is_black() {
+                return Spectrum::ZERO;
+            }
+            c.rays += 1;
+            if scene
+                .bvh
+                .occluded(&Ray::new(offset_origin(p, ng, wi), wi), f32::INFINITY)
+            {
+                return Spectrum::ZERO;
+            }
+            let w = power_heuristic(pdf_light, sel.pdf(bsdf, wo_l, wi_l));
+            *beta * f * Spectrum::from_rgb(le) * (w / pdf_light)
+        }
+    }
 }

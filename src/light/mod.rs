@@ -3,6 +3,18 @@
 //! their power (luminance of Le x area x pi). Emission sampling is split into a position
 //! (density per area) and a direction (cosine-weighted, per solid angle), as light
 //! tracing, BDPT and radiosity shooting need.
+//!
+//! Besides the area lights a scene may have point lights (Dirac in position: reached by
+//! next-event estimation only) and one environment (`env`: light from infinitely far
+//! away, seen by rays that leave the scene). Next-event estimation first chooses among
+//! the kinds (`Lights::choose`) in proportion to their power: the area lights together
+//! (sum of pi A L), each point light (4 pi I) and the environment (pi^2 R^2 times its mean
+//! radiance, R the radius of the scene's bounding sphere, the power it sends through a
+//! disk of the scene's size). With area lights only the choice is skipped, so such scenes
+//! render as before.
+
+pub mod env;
+pub use env::EnvLight;
 
 use crate::material::AlbedoTable;
 use crate::material::Material;
@@ -53,11 +65,38 @@ impl LightSample {
     }
 }
 
+/// An isotropic point light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    pub p: Vec3,
+    /// Radiant intensity (W/sr), linear RGB.
+    pub intensity: [f32; 3],
+}
+
+/// What `Lights::choose` picked for next-event estimation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Chosen {
+    /// The area lights; `sample_position` with this rescaled number picks one of them
+    /// (its `pdf_area` includes the choice of the kind).
+    Area(f32),
+    /// Point light i, chosen with probability `pmf`.
+    Point(usize, f32),
+    /// The environment, chosen with probability `pmf`.
+    Env(f32),
+}
+
 pub struct Lights {
     lights: Vec<AreaLight>,
     dist: Distribution1D,
     /// For each scene triangle, its light index or u32::MAX.
     light_of_tri: Vec<u32>,
+    points: Vec<PointLight>,
+    env: Option<EnvLight>,
+    /// The choice among the kinds: entry 0 the area lights, 1..=points.len() the point
+    /// lights, then the environment. None with area lights only.
+    kinds: Option<Distribution1D>,
+    /// Probability of choosing the area lights (1 with area lights only).
+    p_area: f32,
 }
 
 impl Lights {
@@ -100,6 +139,83 @@ impl Lights {
             dist: Distribution1D::new(&power),
             lights,
             light_of_tri,
+            points: Vec::new(),
+            env: None,
+            kinds: None,
+            p_area: 1.0,
+        }
+    }
+
+    /// Add point lights and an environment to the area lights; `radius` is the radius of
+    /// the scene's bounding sphere (for the environment's share of the choice).
+    pub fn add_distant(&mut self, points: Vec<PointLight>, env: Option<EnvLight>, radius: f32) {
+        self.points = points;
+        self.env = env;
+        if self.points.is_empty() && self.env.is_none() {
+            self.kinds = None;
+            self.p_area = 1.0;
+            return;
+        }
+        let lum = |c: [f32; 3]| crate::spectrum::Spectrum::<3>(c).luminance().max(0.0);
+        let mut w = vec![self.dist.total() as f32];
+        for p in &self.points {
+            w.push(4.0 * std::f32::consts::PI * lum(p.intensity));
+        }
+        if let Some(e) = &self.env {
+            let r = radius.max(1e-3);
+            w.push(std::f32::consts::PI.powi(2) * r * r * e.mean_luminance);
+        }
+        let kinds = Distribution1D::new(&w);
+        self.p_area = if kinds.is_empty() { 0.0 } else { kinds.pmf(0) };
+        self.kinds = Some(kinds);
+    }
+
+    /// Point lights.
+    pub fn points(&self) -> &[PointLight] {
+        &self.points
+    }
+
+    /// The environment, if any.
+    pub fn env(&self) -> Option<&EnvLight> {
+        self.env.as_ref()
+    }
+
+    /// Whether the scene has lights other than area lights (which BDPT, the radiosity
+    /// solution and the estimate roulette's L~ do not know).
+    pub fn has_distant(&self) -> bool {
+        self.kinds.is_some()
+    }
+
+    /// No light of any kind.
+    pub fn is_dark(&self) -> bool {
+        self.lights.is_empty() && self.points.is_empty() && self.env.is_none()
+    }
+
+    /// Choose a kind of light for next-event estimation with `u` (None: no lights).
+    #[inline(always)]
+    pub fn choose(&self, u: f32) -> Option<Chosen> {
+        let Some(k) = &self.kinds else {
+            return (!self.lights.is_empty()).then_some(Chosen::Area(u));
+        };
+        if k.is_empty() {
+            return None;
+        }
+        let (i, pmf, ur) = k.sample(u);
+        Some(if i == 0 {
+            Chosen::Area(ur)
+        } else if i <= self.points.len() {
+            Chosen::Point(i - 1, pmf)
+        } else {
+            Chosen::Env(pmf)
+        })
+    }
+
+    /// Probability that `choose` picks the environment.
+    #[inline]
+    pub fn pmf_env(&self) -> f32 {
+        match (&self.kinds, &self.env) {
+            (Some(k), Some(_)) => k.pmf(k.len() - 1),
+            _ => 0.0,
         }
     }
 
@@ -161,7 +277,7 @@ impl Lights {
             n: l.n,
             le: l.le,
             directional: l.table.is_some(),
-            pdf_area: pmf / l.area,
+            pdf_area: pmf * self.p_area / l.area,
             light: i as u32,
         })
     }
@@ -170,7 +286,7 @@ impl Lights {
     #[inline]
     pub fn pdf_position(&self, i: u32) -> f32 {
         let l = &self.lights[i as usize];
-        self.dist.pmf(i as usize) / l.area
+        self.dist.pmf(i as usize) * self.p_area / l.area
     }
 
     /// An emission direction from light `i` (cosine-weighted about its normal) and its

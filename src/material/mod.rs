@@ -4,21 +4,37 @@
 //! the enum the integrators match on. Combined BRDFs (diffuse + normalized Phong, the
 //! combined BRDF of the Russian-roulette paper) keep their elementary lobes visible:
 //! `Bsdf::lobes` gives each lobe with its own sample/pdf/albedo, so a roulette or a
-//! lobe-selection strategy can choose among them.
+//! lobe-selection strategy can choose among them. A rough plastic is such a combined
+//! BRDF (its diffuse base and its GGX coat), and a rough conductor a single glossy lobe.
+//!
+//! The microfacet models follow Mitsuba 3's plugins (`conductor`, `roughconductor`,
+//! `plastic`, `roughplastic`, `dielectric`, `roughdielectric`, `thindielectric`), with the
+//! GGX distribution of `microfacet`. Transmission (`Bsdf::transmits`) evaluates and samples
+//! directions on the other side of the surface; its radiance scaling is undone on light
+//! subpaths with `Bsdf::adjoint_scale`.
 
 pub mod albedo;
+pub mod conductor;
 pub mod dielectric;
 pub mod lambert;
+pub mod microfacet;
 pub mod mirror;
 pub mod phong;
+pub mod plastic;
+pub mod rough_dielectric;
 mod surface;
+pub mod thin_dielectric;
 pub use surface::Material;
 
 pub use albedo::AlbedoTable;
+pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use lambert::Lambert;
 pub use mirror::Mirror;
 pub use phong::Phong;
+pub use plastic::Plastic;
+pub use rough_dielectric::RoughDielectric;
+pub use thin_dielectric::ThinDielectric;
 
 use crate::spectrum::Spectrum;
 use glam::{Vec2, Vec3};
@@ -40,6 +56,12 @@ pub struct BsdfSample<const N: usize> {
 pub enum Lobe {
     Diffuse(Lambert),
     Glossy(Phong),
+    /// A rough conductor (its only lobe).
+    Conductor(Conductor),
+    /// A rough plastic's diffuse base (under the coat).
+    PlasticBase(Plastic),
+    /// A rough plastic's GGX coat reflection.
+    PlasticCoat(Plastic),
 }
 
 impl Lobe {
@@ -48,6 +70,9 @@ impl Lobe {
         match self {
             Lobe::Diffuse(l) => l.eval(wo, wi),
             Lobe::Glossy(p) => p.eval(wo, wi),
+            Lobe::Conductor(c) => c.eval(wo, wi),
+            Lobe::PlasticBase(p) => p.eval_base(wo, wi),
+            Lobe::PlasticCoat(p) => p.eval_coat(wo, wi),
         }
     }
     #[inline]
@@ -55,6 +80,15 @@ impl Lobe {
         match self {
             Lobe::Diffuse(l) => l.pdf(wo, wi),
             Lobe::Glossy(p) => p.pdf(wo, wi),
+            Lobe::Conductor(c) => c.pdf(wo, wi),
+            Lobe::PlasticBase(_) => {
+                if wo.z <= 0.0 {
+                    0.0
+                } else {
+                    crate::sampling::pdf_cosine_hemisphere(wi)
+                }
+            }
+            Lobe::PlasticCoat(p) => p.pdf_coat(wo, wi),
         }
     }
     /// A direction from this lobe's own density (None if it fell below the surface).
@@ -63,14 +97,21 @@ impl Lobe {
         match self {
             Lobe::Diffuse(l) => l.sample_dir(wo, u),
             Lobe::Glossy(p) => p.sample_dir(wo, u),
+            Lobe::Conductor(c) => c.sample_dir(wo, u),
+            Lobe::PlasticBase(_) => Lambert { kd: [1.0; 3] }.sample_dir(wo, u),
+            Lobe::PlasticCoat(p) => p.sample_coat_dir(wo, u),
         }
     }
-    /// Reflectance parameter of the lobe (kd or ks): an upper bound of its albedo.
+    /// Reflectance parameter of the lobe (kd or ks: an upper bound of its albedo; for the
+    /// microfacet lobes the albedo at normal incidence, or the coat's average).
     #[inline]
     pub fn albedo_rgb(&self) -> [f32; 3] {
         match self {
             Lobe::Diffuse(l) => l.kd,
             Lobe::Glossy(p) => p.ks,
+            Lobe::Conductor(c) => c.albedo_rgb(),
+            Lobe::PlasticBase(p) => p.base_albedo_rgb(),
+            Lobe::PlasticCoat(p) => p.coat_albedo_rgb(),
         }
     }
 }
@@ -85,6 +126,14 @@ pub enum Bsdf {
     DiffuseGlossy(Lambert, Phong),
     Mirror(Mirror),
     Dielectric(Dielectric),
+    /// Smooth (Dirac) or rough (GGX) conductor.
+    Conductor(Conductor),
+    /// Diffuse base under a smooth or rough dielectric coat.
+    Plastic(Plastic),
+    /// Rough dielectric interface: reflection and refraction.
+    RoughDielectric(RoughDielectric),
+    /// Thin dielectric slab (Dirac reflection and straight transmission).
+    ThinDielectric(ThinDielectric),
 }
 
 /// Luminance of an RGB triple (lobe selection weights).
@@ -121,20 +170,53 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(_) => Bsdf::Diffuse(Lambert { kd }),
             Bsdf::DiffuseGlossy(_, p) => Bsdf::DiffuseGlossy(Lambert { kd }, p),
+            Bsdf::Plastic(p) => Bsdf::Plastic(Plastic { kd, ..p }),
             b => b,
         }
     }
 
-    /// Opaque BSDFs are two-sided (the frame is flipped towards wo); glass is not.
+    /// Opaque BSDFs are two-sided (the frame is flipped towards wo); glass is not (a thin
+    /// slab is symmetric, so it is).
     #[inline]
     pub fn is_two_sided(&self) -> bool {
-        !matches!(self, Bsdf::Dielectric(_))
+        !matches!(self, Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_))
     }
 
     /// Only Dirac lobes: next-event estimation is useless here.
     #[inline]
     pub fn is_delta(&self) -> bool {
-        matches!(self, Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Black)
+        match self {
+            Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Black | Bsdf::ThinDielectric(_) => true,
+            Bsdf::Conductor(c) => c.is_smooth(),
+            _ => false,
+        }
+    }
+
+    /// `eval` and `pdf` are non-zero for directions on the other side of the surface
+    /// (wi.z < 0 < wo.z or the reverse): next-event estimation and BDPT connections must
+    /// try them.
+    #[inline]
+    pub fn transmits(&self) -> bool {
+        matches!(self, Bsdf::RoughDielectric(_))
+    }
+
+    /// The factor that turns a sampled weight f(wo, wi) |cos theta_i| / p, which carries
+    /// radiance from wi to wo, into the weight of importance (or light particles) going
+    /// from wo to wi, f(wi, wo) |cos theta_i| / p: (eta_i / eta_o)^2 for a refraction,
+    /// eta_i and eta_o the indices on the sides of wi and wo; 1 otherwise.
+    #[inline]
+    pub fn adjoint_scale(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let eta = match self {
+            Bsdf::Dielectric(d) => d.eta,
+            Bsdf::RoughDielectric(d) => d.eta,
+            _ => return 1.0,
+        };
+        if wo.z * wi.z >= 0.0 {
+            return 1.0;
+        }
+        // eta_r = eta_o / eta_i for a crossing from the side of wo
+        let eta_r = dielectric::fresnel_dielectric(wo.z, eta).2;
+        1.0 / (eta_r * eta_r)
     }
 
     /// Elementary lobes and their count.
@@ -144,6 +226,10 @@ impl Bsdf {
         match *self {
             Bsdf::Diffuse(l) => ([Lobe::Diffuse(l), zero], 1),
             Bsdf::DiffuseGlossy(l, p) => ([Lobe::Diffuse(l), Lobe::Glossy(p)], 2),
+            Bsdf::Conductor(c) if !c.is_smooth() => ([Lobe::Conductor(c), zero], 1),
+            Bsdf::Plastic(p) if !p.is_smooth() => ([Lobe::PlasticBase(p), Lobe::PlasticCoat(p)], 2),
+            // smooth coats and transmission are no elementary reflection lobes: the
+            // lobe-selection methods fall back to the mixture there
             _ => ([zero, zero], 0),
         }
     }
@@ -154,6 +240,9 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(l) => l.eval(wo, wi),
             Bsdf::DiffuseGlossy(l, p) => l.eval(wo, wi) + p.eval(wo, wi),
+            Bsdf::Conductor(c) => c.eval(wo, wi),
+            Bsdf::Plastic(p) => p.eval(wo, wi),
+            Bsdf::RoughDielectric(d) => d.eval(wo, wi),
             _ => Spectrum::ZERO,
         }
     }
@@ -179,6 +268,9 @@ impl Bsdf {
                 let (pd, pg) = Self::lobe_probs(l, p);
                 pd * l.pdf(wo, wi) + pg * p.pdf(wo, wi)
             }
+            Bsdf::Conductor(c) => c.pdf(wo, wi),
+            Bsdf::Plastic(p) => p.pdf(wo, wi),
+            Bsdf::RoughDielectric(d) => d.pdf(wo, wi),
             _ => 0.0,
         }
     }
@@ -211,6 +303,10 @@ impl Bsdf {
             }
             Bsdf::Mirror(m) => m.sample(wo),
             Bsdf::Dielectric(d) => d.sample(wo, u_lobe),
+            Bsdf::Conductor(c) => c.sample(wo, u),
+            Bsdf::Plastic(p) => p.sample(wo, u_lobe, u),
+            Bsdf::RoughDielectric(d) => d.sample(wo, u_lobe, u),
+            Bsdf::ThinDielectric(d) => d.sample(wo, u_lobe),
         }
     }
 
@@ -223,6 +319,11 @@ impl Bsdf {
             Bsdf::DiffuseGlossy(l, p) => Spectrum::from_rgb(l.kd) + Spectrum::from_rgb(p.ks),
             Bsdf::Mirror(m) => Spectrum::from_rgb(m.ks),
             Bsdf::Dielectric(_) => Spectrum::ONE,
+            Bsdf::Conductor(c) => Spectrum::from_rgb(c.albedo_rgb()),
+            Bsdf::Plastic(p) => {
+                Spectrum::from_rgb(p.base_albedo_rgb()) + Spectrum::from_rgb(p.coat_albedo_rgb())
+            }
+            Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => Spectrum::ONE,
         }
     }
 }

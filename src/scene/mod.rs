@@ -247,28 +247,32 @@ impl Scene {
                 }),
                 None => None,
             };
-            let (kd, ks, kd_texture, w) =
-                conserve_energy(m, kd_texture, &mut textures, &mut tex_paths);
+            let (kd, ks, kd_texture, w) = if m.model.is_some() {
+                // a surface model reads kd alone (plastic's base): Ks and illum are not its
+                let mut only_kd = m.clone();
+                only_kd.ks = [0.0; 3];
+                only_kd.illum = 2;
+                conserve_energy(&only_kd, kd_texture, &mut textures, &mut tex_paths)
+            } else {
+                conserve_energy(m, kd_texture, &mut textures, &mut tex_paths)
+            };
             if let Some(w) = w.filter(|w| !material_warnings.contains(w)) {
                 material_warnings.push(w);
             }
-            if let Some(model) = &m.model {
-                // Not yet shaded by kalos: say so once per material, render the MTL fields.
-                let w = format!(
-                    "material {}{}: bsdf '{}' is not supported yet, rendered as {}",
-                    m.name,
-                    m.source
-                        .as_deref()
-                        .map(|s| format!(" ({s})"))
-                        .unwrap_or_default(),
-                    model.plugin(),
-                    describe_mtl(m.illum, kd, ks)
-                );
-                if !material_warnings.contains(&w) {
-                    material_warnings.push(w);
-                }
-            }
-            let bsdf = Bsdf::from_mtl(kd, ks, m.ns, m.ni, m.illum);
+            let bsdf = match &m.model {
+                Some(model) => bsdf_of_model(model, kd).map_err(|e| {
+                    format!(
+                        "{}material '{}' ({}): {e}",
+                        m.source
+                            .as_deref()
+                            .map(|s| format!("{s}: "))
+                            .unwrap_or_default(),
+                        m.name,
+                        model.plugin()
+                    )
+                })?,
+                None => Bsdf::from_mtl(kd, ks, m.ns, m.ni, m.illum),
+            };
             let (emission, emission_table) = if m.emit_one_minus_albedo {
                 let t = AlbedoTable::new(&bsdf);
                 (t.hemispherical(true), Some(Arc::new(t)))
@@ -286,8 +290,37 @@ impl Scene {
         let t0 = Instant::now();
         let bvh = Bvh::build(&desc.positions);
         let bvh_seconds = t0.elapsed().as_secs_f64();
-        let lights = Lights::new(&desc.positions, &desc.material, &materials);
+        let mut lights = Lights::new(&desc.positions, &desc.material, &materials);
         let bounds = desc.bounds();
+        let env = match &desc.environment {
+            Some(e) => Some(environment_light(e)?),
+            None => None,
+        };
+        let points = desc
+            .point_lights
+            .iter()
+            .map(|p| {
+                if p.position.is_finite()
+                    && p.intensity.iter().all(|v| v.is_finite() && *v >= 0.0)
+                {
+                    Ok(crate::light::PointLight {
+                        p: p.position,
+                        intensity: p.intensity,
+                    })
+                } else {
+                    Err(format!(
+                        "{}point light: position and intensity must be finite, intensity non-negative",
+                        p.source.as_deref().map(|s| format!("{s}: ")).unwrap_or_default()
+                    ))
+                }
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        let radius = if bounds.is_empty() {
+            1.0
+        } else {
+            bounds.diagonal() * 0.5
+        };
+        lights.add_distant(points, env, radius);
         let mut warnings = desc.warnings;
         let (camera, camera_how) = match desc.camera {
             Some(c) => (c, "scene file".to_string()),
@@ -311,24 +344,7 @@ impl Scene {
             }
         };
         warnings.extend(material_warnings);
-        if let Some(e) = &desc.environment {
-            warnings.push(format!(
-                "scene {}: environment light{} is not supported yet, ignored",
-                desc.name,
-                e.source
-                    .as_deref()
-                    .map(|s| format!(" ({s})"))
-                    .unwrap_or_default()
-            ));
-        }
-        if !desc.point_lights.is_empty() {
-            warnings.push(format!(
-                "scene {}: {} point light(s) not supported yet, ignored",
-                desc.name,
-                desc.point_lights.len()
-            ));
-        }
-        if lights.is_empty() {
+        if lights.is_dark() {
             warnings.push(format!(
                 "scene {} has no emitter: the image will be black",
                 desc.name
@@ -386,15 +402,97 @@ impl Scene {
     }
 }
 
-/// How an MTL-described surface renders, for messages.
-fn describe_mtl(illum: u8, kd: [f32; 3], ks: [f32; 3]) -> &'static str {
-    match illum {
-        5 => "a mirror",
-        7 => "smooth glass",
-        _ if ks != [0.0; 3] => "diffuse plus Phong",
-        _ if kd != [0.0; 3] => "diffuse",
-        _ => "black",
-    }
+/// The BSDF of a Mitsuba surface model; `kd` is the diffuse reflectance (plastic's base).
+pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String> {
+    use crate::material::{Conductor, Dielectric, Plastic, RoughDielectric, ThinDielectric};
+    let finite = |v: &[f32]| v.iter().all(|x| x.is_finite() && *x >= 0.0);
+    let alpha_ok = |a: f32| a.is_finite() && (0.0..=4.0).contains(&a);
+    let eta_ok = |e: f32| e.is_finite() && e > 0.0 && e != 1.0;
+    Ok(match *model {
+        SurfaceModel::Conductor {
+            eta,
+            k,
+            specular,
+            alpha,
+        } => {
+            if !(finite(&eta) && finite(&k) && finite(&specular)) {
+                return Err(
+                    "eta, k and specular_reflectance must be finite and non-negative".into(),
+                );
+            }
+            if !alpha_ok(alpha) {
+                return Err(format!("alpha {alpha}: must be in [0, 4]"));
+            }
+            Bsdf::Conductor(Conductor {
+                eta,
+                k,
+                specular,
+                alpha,
+            })
+        }
+        SurfaceModel::Plastic {
+            eta,
+            specular,
+            alpha,
+            nonlinear,
+        } => {
+            if !eta_ok(eta) {
+                return Err(format!(
+                    "eta {eta}: the indices inside and outside must be positive and differ"
+                ));
+            }
+            if !(finite(&specular) && finite(&kd)) {
+                return Err(
+                    "diffuse and specular reflectance must be finite and non-negative".into(),
+                );
+            }
+            if !alpha_ok(alpha) {
+                return Err(format!("alpha {alpha}: must be in [0, 4]"));
+            }
+            Bsdf::Plastic(Plastic::new(kd, specular, eta, alpha, nonlinear))
+        }
+        SurfaceModel::Dielectric { eta, alpha } => {
+            if !eta_ok(eta) {
+                return Err(format!(
+                    "eta {eta}: the indices inside and outside must be positive and differ"
+                ));
+            }
+            if !alpha_ok(alpha) {
+                return Err(format!("alpha {alpha}: must be in [0, 4]"));
+            }
+            if alpha > 0.0 {
+                Bsdf::RoughDielectric(RoughDielectric { eta, alpha })
+            } else {
+                Bsdf::Dielectric(Dielectric { eta })
+            }
+        }
+        SurfaceModel::ThinDielectric { eta } => {
+            if !(eta.is_finite() && eta > 0.0) {
+                return Err(format!("eta {eta}: must be positive"));
+            }
+            Bsdf::ThinDielectric(ThinDielectric { eta })
+        }
+    })
+}
+
+/// The environment light of a description: its map read through `image_io` (EXR, HDR or
+/// PNG), errors naming the file.
+fn environment_light(e: &EnvironmentDesc) -> Result<crate::light::EnvLight, String> {
+    let at = e
+        .source
+        .as_deref()
+        .map(|s| format!("{s}: "))
+        .unwrap_or_default();
+    let img = match &e.map {
+        Some(p) => Some(
+            crate::image_io::read_image(p).map_err(|err| format!("{at}environment map: {err}"))?,
+        ),
+        None => None,
+    };
+    crate::light::EnvLight::new(e.radiance, img.as_ref(), e.to_world).map_err(|err| match &e.map {
+        Some(p) => format!("{at}environment map {}: {err}", p.display()),
+        None => format!("{at}environment: {err}"),
+    })
 }
 
 /// A camera on +z looking at the centre of the bounds (see `camera::framing_camera`).

@@ -23,6 +23,22 @@
 //! kd = [0.8, 0.8, 0.8]
 //! ks = [0.2, 0.2, 0.2]
 //! ns = 30
+//!
+//! [materials.ball]       # a Mitsuba surface model instead of the MTL one
+//! model = { type = "roughplastic", eta = 1.49, alpha = 0.1 }   # kd: the base
+//! # conductor / roughconductor: eta, k (RGB, default the perfect mirror 0 + 1i),
+//! #   specular, alpha; plastic / roughplastic: eta, specular, alpha, nonlinear;
+//! # dielectric / roughdielectric: eta, alpha; thindielectric: eta.
+//! # (alpha defaults to 0.1 for the rough ones, as in Mitsuba)
+//!
+//! [environment]          # light from far away (Mitsuba's constant / envmap)
+//! radiance = [1, 1, 1]   # constant radiance, or the scale of the map
+//! map = "sky.exr"        # optional: equirectangular EXR, HDR or PNG, Mitsuba's uv
+//! rotate = [0, 90, 0]    # degrees about x, then y, then z (Mitsuba's to_world)
+//!
+//! [[point_lights]]
+//! position = [0, 2, 0]
+//! intensity = [10, 10, 10]   # W/sr
 //! ```
 
 use super::{CameraDesc, RenderDefaults, SceneDesc};
@@ -40,6 +56,139 @@ struct SceneFile {
     objects: Vec<ObjectSection>,
     #[serde(default)]
     materials: BTreeMap<String, MaterialOverride>,
+    environment: Option<EnvironmentSection>,
+    #[serde(default)]
+    point_lights: Vec<PointLightSection>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EnvironmentSection {
+    radiance: Option<[f32; 3]>,
+    map: Option<String>,
+    rotate: Option<[f32; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PointLightSection {
+    position: [f32; 3],
+    intensity: [f32; 3],
+}
+
+/// Mitsuba's surface models by plugin name.
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+enum ModelSection {
+    Conductor {
+        eta: Option<[f32; 3]>,
+        k: Option<[f32; 3]>,
+        specular: Option<[f32; 3]>,
+    },
+    RoughConductor {
+        eta: Option<[f32; 3]>,
+        k: Option<[f32; 3]>,
+        specular: Option<[f32; 3]>,
+        alpha: Option<f32>,
+    },
+    Plastic {
+        eta: Option<f32>,
+        specular: Option<[f32; 3]>,
+        nonlinear: Option<bool>,
+    },
+    RoughPlastic {
+        eta: Option<f32>,
+        specular: Option<[f32; 3]>,
+        alpha: Option<f32>,
+        nonlinear: Option<bool>,
+    },
+    Dielectric {
+        eta: Option<f32>,
+    },
+    RoughDielectric {
+        eta: Option<f32>,
+        alpha: Option<f32>,
+    },
+    ThinDielectric {
+        eta: Option<f32>,
+    },
+}
+
+/// Mitsuba's default roughness.
+const DEFAULT_ALPHA: f32 = 0.1;
+
+impl ModelSection {
+    fn model(&self) -> super::SurfaceModel {
+        use super::SurfaceModel as M;
+        let one = Some([1.0f32; 3]);
+        match *self {
+            ModelSection::Conductor { eta, k, specular } => M::Conductor {
+                eta: eta.unwrap_or([0.0; 3]),
+                k: k.unwrap_or([1.0; 3]),
+                specular: specular.or(one).unwrap(),
+                alpha: 0.0,
+            },
+            ModelSection::RoughConductor {
+                eta,
+                k,
+                specular,
+                alpha,
+            } => M::Conductor {
+                eta: eta.unwrap_or([0.0; 3]),
+                k: k.unwrap_or([1.0; 3]),
+                specular: specular.or(one).unwrap(),
+                alpha: alpha.unwrap_or(DEFAULT_ALPHA),
+            },
+            ModelSection::Plastic {
+                eta,
+                specular,
+                nonlinear,
+            } => M::Plastic {
+                eta: eta.unwrap_or(1.49),
+                specular: specular.or(one).unwrap(),
+                alpha: 0.0,
+                nonlinear: nonlinear.unwrap_or(false),
+            },
+            ModelSection::RoughPlastic {
+                eta,
+                specular,
+                alpha,
+                nonlinear,
+            } => M::Plastic {
+                eta: eta.unwrap_or(1.49),
+                specular: specular.or(one).unwrap(),
+                alpha: alpha.unwrap_or(DEFAULT_ALPHA),
+                nonlinear: nonlinear.unwrap_or(false),
+            },
+            ModelSection::Dielectric { eta } => M::Dielectric {
+                eta: eta.unwrap_or(1.5),
+                alpha: 0.0,
+            },
+            ModelSection::RoughDielectric { eta, alpha } => M::Dielectric {
+                eta: eta.unwrap_or(1.5),
+                alpha: alpha.unwrap_or(DEFAULT_ALPHA),
+            },
+            ModelSection::ThinDielectric { eta } => M::ThinDielectric {
+                eta: eta.unwrap_or(1.5),
+            },
+        }
+    }
+
+    /// A rough model's alpha must be positive (0 is the smooth plugin).
+    fn check(&self) -> Result<(), String> {
+        match *self {
+            ModelSection::RoughConductor { alpha: Some(a), .. }
+            | ModelSection::RoughPlastic { alpha: Some(a), .. }
+            | ModelSection::RoughDielectric { alpha: Some(a), .. }
+                if a.is_nan() || a <= 0.0 =>
+            {
+                Err(format!(
+                    "alpha {a}: a rough model needs alpha > 0 (use the smooth model for 0)"
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -75,6 +224,7 @@ struct MaterialOverride {
     ns: Option<f32>,
     ni: Option<f32>,
     illum: Option<u8>,
+    model: Option<ModelSection>,
 }
 
 pub fn load(path: &Path) -> Result<SceneDesc, String> {
@@ -184,6 +334,19 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
                     ));
                 }
             }
+            if let Some(model) = &ov.model {
+                model
+                    .check()
+                    .map_err(|e| format!("{file}: materials.{name}.model: {e}"))?;
+                let model = model.model();
+                // the same validation the scene build applies, reported with the file
+                super::bsdf_of_model(&model, m.kd)
+                    .map_err(|e| format!("{file}: materials.{name}.model: {e}"))?;
+                m.model = Some(model);
+                if m.source.is_none() {
+                    m.source = Some(format!("{file} materials.{name}"));
+                }
+            }
             if (ov.illum.is_some() || ov.ni.is_some()) && m.illum == 7 && m.ni <= 0.0 {
                 m.notes.push(format!(
                     "glass (illum 7) with Ni {} (from {file} materials.{name}): an index of refraction must be positive; rendered with 1.5",
@@ -196,6 +359,56 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
                 "{file}: materials.{name}: no material of that name in the scene"
             ));
         }
+    }
+    if let Some(e) = &sf.environment {
+        let radiance = e.radiance.unwrap_or([1.0; 3]);
+        if radiance.iter().any(|v| !v.is_finite() || *v < 0.0) {
+            return Err(format!(
+                "{file}: [environment] radiance: values must be finite and non-negative"
+            ));
+        }
+        let r = e.rotate.unwrap_or([0.0; 3]);
+        if r.iter().any(|v| !v.is_finite()) {
+            return Err(format!(
+                "{file}: [environment] rotate: values must be finite"
+            ));
+        }
+        let q = Quat::from_euler(
+            EulerRot::ZYX,
+            r[2].to_radians(),
+            r[1].to_radians(),
+            r[0].to_radians(),
+        );
+        let map = match &e.map {
+            Some(m) => {
+                let p = super::mtl::normalise_path(dir, m);
+                crate::input::check_regular_file(&p, crate::input::max_input_bytes()?)
+                    .map_err(|err| format!("{file}: [environment] map: {err}"))?;
+                crate::image_io::check_readable(&p)
+                    .map_err(|err| format!("{file}: [environment] map: {err}"))?;
+                Some(p)
+            }
+            None => None,
+        };
+        desc.environment = Some(super::EnvironmentDesc {
+            radiance,
+            map,
+            to_world: glam::Mat3::from_quat(q),
+            source: Some(format!("{file} [environment]")),
+        });
+    }
+    for (i, p) in sf.point_lights.iter().enumerate() {
+        let ok = |v: &[f32; 3]| v.iter().all(|x| x.is_finite());
+        if !ok(&p.position) || !ok(&p.intensity) || p.intensity.iter().any(|v| *v < 0.0) {
+            return Err(format!(
+                "{file}: point_lights[{i}]: position and intensity must be finite, intensity non-negative"
+            ));
+        }
+        desc.point_lights.push(super::PointLightDesc {
+            position: Vec3::from(p.position),
+            intensity: p.intensity,
+            source: Some(format!("{file} point_lights[{i}]")),
+        });
     }
     if let Some(c) = sf.camera {
         c.validate().map_err(|e| format!("{file}: [camera]: {e}"))?;
