@@ -133,7 +133,10 @@ impl NativeScene {
     /// `kalos info --json` plus the scene's render defaults and warnings, as JSON.
     fn info_json(&self) -> String {
         let s = &self.scene;
-        let mut v = serde_json::to_value(&s.info).unwrap_or_default();
+        // (through text: f32 fields keep their short spelling, as `kalos info --json`'s)
+        let mut v: serde_json::Value = serde_json::to_string(&s.info)
+            .and_then(|t| serde_json::from_str(&t))
+            .unwrap_or_default();
         v["spec"] = serde_json::json!(self.spec);
         v["default_spp"] = serde_json::json!(s.defaults.spp.unwrap_or(DEFAULT_SPP));
         v["default_res"] = serde_json::json!(s.defaults.res);

@@ -1,0 +1,47 @@
+"""Ctrl-C stops a long render: the render polls Python's signals while it runs (the GIL
+released), stops at the next row of pixels and raises KeyboardInterrupt."""
+
+import _thread
+import signal
+import threading
+import time
+
+import pytest
+
+import kalos
+
+# About 4e9 samples: hours of work, so an early end can only be the interrupt.
+LONG = dict(spp=60000, res=(256, 256), threads=1)
+
+
+def interrupt_by_signal():
+    signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+
+
+@pytest.mark.parametrize("send", [_thread.interrupt_main, interrupt_by_signal], ids=["interrupt_main", "SIGINT"])
+def test_ctrl_c_stops_a_long_render(send):
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    scene = kalos.load("cornell")
+    seen = []
+    timer = threading.Timer(0.5, send)
+    t0 = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            kalos.render(scene, progress=lambda done, total: seen.append((done, total)), **LONG)
+    finally:
+        timer.cancel()
+    # ended by the interrupt (a generous bound: the render itself would take hours)
+    assert time.monotonic() - t0 < 60
+    # the progress callback saw the render run
+    assert seen and seen[-1][1] == 60000 * 256 * 256
+    # and the module still renders afterwards
+    assert kalos.render(scene, spp=1, res=(8, 8)).shape == (8, 8, 3)
+
+
+def test_an_exception_in_the_progress_callback_stops_the_render():
+    def cb(done, total):
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        kalos.render("cornell", progress=cb, **LONG)
