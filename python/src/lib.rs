@@ -84,7 +84,7 @@ fn options() -> String {
                 "flag": format!("--{long}"),
                 "takes_value": !flag,
                 "sets_false": matches!(a.get_action(), clap::ArgAction::SetFalse),
-                "default": if flag { serde_json::Value::Null } else if defaults.is_empty() {
+                "default": if flag || defaults.is_empty() {
                     serde_json::Value::Null
                 } else {
                     serde_json::json!(defaults.join(","))
@@ -181,7 +181,7 @@ fn load(py: Python<'_>, spec: &str) -> PyResult<NativeScene> {
     let s = spec.to_string();
     let scene = py
         .detach(move || kalos::scene::load(&s))
-        .map_err(|e| PyErr::new::<SceneError, _>(e))?;
+        .map_err(PyErr::new::<SceneError, _>)?;
     Ok(NativeScene {
         scene: Arc::new(scene),
         spec: spec.to_string(),
@@ -239,11 +239,10 @@ fn run_watched<T: Send>(
                 let _ = tx.send(());
                 r
             });
-            loop {
-                match rx.recv_timeout(Duration::from_millis(100)) {
-                    Err(mpsc::RecvTimeoutError::Timeout) => {}
-                    _ => break,
-                }
+            // (a sent value or a dropped sender both mean the work is over)
+            while let Err(mpsc::RecvTimeoutError::Timeout) =
+                rx.recv_timeout(Duration::from_millis(100))
+            {
                 Python::attach(|py| {
                     if interrupt.is_none() {
                         if let Err(e) = py.check_signals() {
