@@ -45,3 +45,25 @@ def test_an_exception_in_the_progress_callback_stops_the_render():
 
     with pytest.raises(RuntimeError, match="stop here"):
         kalos.render("cornell", progress=cb, **LONG)
+
+
+def test_the_gil_is_released_while_rendering():
+    """Another Python thread runs while a render is in progress."""
+    ticks = []
+    stop = threading.Event()
+
+    def count():
+        while not stop.is_set():
+            ticks.append(1)
+            time.sleep(0.001)
+
+    t = threading.Thread(target=count)
+    t.start()
+    try:
+        before = len(ticks)
+        kalos.render("cornell", spp=64, res=(128, 128), threads=1)
+        during = len(ticks) - before
+    finally:
+        stop.set()
+        t.join()
+    assert during > 10, during

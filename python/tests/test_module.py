@@ -58,6 +58,23 @@ def test_image_equals_the_cli_bit_for_bit(tmp_path, cli, opts):
     assert img.stats["spp"] == opts["spp"] and img.stats["width"] == w
 
 
+@pytest.mark.parametrize(
+    "opts",
+    [dict(method="dtf", spp=16, res=(16, 16), dtf_n=8), dict(method="rw", spp=8, res=(16, 16), rw_pilot_res=8)],
+    ids=["dtf", "rw"],
+)
+def test_dtf_and_rw_images_equal_the_cli(tmp_path, cli, opts):
+    exr = tmp_path / "cli.exr"
+    cli("render", "cornell", *cli_args(opts), "-q", "-o", exr)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", kalos.KalosWarning)
+        img = kalos.render("cornell", **opts)
+    assert np.array_equal(kalos.read(exr), img)
+    assert img.film is None and img.stats["method"] == opts["method"]
+    with pytest.raises(ValueError, match="plain render"):
+        kalos.write(tmp_path / "x.kfilm", img)
+
+
 def test_options_and_defaults_are_the_clis(tmp_path, cli):
     # the job the CLI records in a film file with no options is kalos.job() with none
     film = tmp_path / "d.kfilm"
