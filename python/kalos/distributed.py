@@ -30,7 +30,7 @@ from . import Film, RenderResult, Scene, _argv, _kalos, job as _job, load, merge
 
 log = logging.getLogger("kalos.distributed")
 
-__all__ = ["render", "render_part", "sample_ranges"]
+__all__ = ["render", "render_dtf_part", "render_part", "sample_ranges"]
 
 _SCENES: Dict[Tuple[str, Optional[float]], Scene] = {}
 _SCENES_LOCK = threading.Lock()
@@ -88,8 +88,10 @@ def render(
     Dask; ``retries`` re-runs a task that raised. Returns the ``RenderResult`` of the
     merged film: the same image as ``kalos.render(scene, spp=spp, **options)``.
 
-    Only ``method="plain"`` (the default) and a sample budget (not ``time``) can be
-    distributed. Raises ValueError for bad options before anything is sent."""
+    ``method="plain"`` (the default) and ``method="dtf"`` (each phase's pass split into
+    sample ranges of about ``chunk_spp`` x pixels samples; the allocation, top-ups and
+    filter on the client) with a sample budget
+    or ``dtf_eps`` (not ``time``) can be distributed. Raises ValueError for bad options before anything is sent."""
     try:
         from distributed import as_completed, get_client
     except ImportError as e:  # pragma: no cover - depends on the environment
@@ -97,14 +99,16 @@ def render(
     if options.get("time") is not None:
         raise ValueError("time: a distributed render splits a sample budget: give spp, not time")
     method = options.get("method") or "plain"
-    if method != "plain":
-        raise ValueError(f"method {method!r}: only plain renders are distributed so far")
+    if method not in ("plain", "dtf"):
+        raise ValueError(f"method {method!r}: only plain and dtf renders are distributed so far")
     if client is None:
         client = get_client()
     sc = scene if isinstance(scene, Scene) else load(scene)
     spec = sc.spec
     if os.path.exists(spec) and spec not in _kalos_builtin_names():
         spec = os.path.abspath(spec)
+    if method == "dtf":
+        return _render_dtf(client, sc, spec, spp, chunk_spp, progress, retries, options)
     first = int(options.pop("first_sample", None) or 0)
     spp = int(spp) if spp is not None else sc.default_spp
     # the client refuses bad options before any task is sent (the CLI's messages)
@@ -168,6 +172,90 @@ def render(
         "mean_rgb": [float(img[..., c].mean(dtype="float64")) for c in range(3)],
     }
     img.warnings = []
+    return img
+
+
+def render_dtf_part(spec: str, argv: List[str], dependent: bool, stream: int, first: int, n: int,
+                    counts: Optional[bytes], rays: bool) -> Tuple[bytes, bytes, int, int]:
+    """One task of a DTF pass: samples ``first..first+n`` of every pixel (or
+    ``first..first+counts[p]``) of the phase; returns the film bytes, rays per pixel, paths
+    and rays."""
+    scene = _cached_scene(spec)
+    return _kalos.render_dtf_part(scene._native, list(argv), dependent, stream, first, n, counts, rays)
+
+
+def _balanced_ranges(per_index, target: int) -> List[Tuple[int, int]]:
+    """Sample index ranges (first, count) holding about ``target`` samples each, given the
+    samples at each index (a DTF pass's per-pixel counts fall off with the index)."""
+    target = max(1, int(target))
+    ranges, a, acc = [], 0, 0
+    for j, c in enumerate(per_index.tolist()):
+        acc += c
+        if acc >= target:
+            ranges.append((a, j + 1 - a))
+            a, acc = j + 1, 0
+    if a < len(per_index):
+        ranges.append((a, len(per_index) - a))
+    return ranges or [(0, 0)]
+
+
+def _render_dtf(client, sc, spec, spp, chunk_spp, progress, retries, options) -> RenderResult:
+    """DTF on the cluster: each pass (phase 1, phase 2, top-ups) split into sample ranges
+    as tasks; the allocation, top-ups and filter run on the client (in Rust)."""
+    import numpy as np
+    from distributed import as_completed
+
+    if options.get("first_sample"):
+        raise ValueError("first_sample: a dtf render is not a sample range")
+    argv = _argv(dict(options, spp=spp))
+    threads = max(1, sum(client.nthreads().values()))
+    w, h = _job(spec, **dict(options, spp=spp))["res"] or sc.info()["default_res"] or (256, 256)
+    native_pixels = int(w) * int(h)
+    token = uuid.uuid4().hex[:12]
+    t0 = time.perf_counter()
+    passes = []
+
+    def run_pass(dependent, stream, n, counts, rays):
+        arr = None if counts is None else np.frombuffer(counts, dtype="<u4").astype(np.int64)
+        pixels = native_pixels
+        # samples at each index j: all pixels (uniform) or those whose count exceeds j
+        if arr is None:
+            per_index = np.full(n, pixels, dtype=np.int64)
+        else:
+            hist = np.bincount(arr, minlength=int(arr.max(initial=0)) + 1)
+            per_index = pixels - np.cumsum(hist)[:-1]
+        ranges = _balanced_ranges(per_index, pixels * int(chunk_spp) if chunk_spp
+                                  else math.ceil(int(per_index.sum()) / (2 * threads)))
+        futures = []
+        for i, (a, k) in enumerate(ranges):
+            part = None if arr is None else np.clip(arr - a, 0, k).astype("<u4").tobytes()
+            futures.append(client.submit(render_dtf_part, spec, argv, dependent, stream, a, k, part, rays,
+                                         key=f"kalos-dtf-{token}-s{stream}-{i}", pure=False, retries=retries))
+        index = {f.key: i for i, f in enumerate(futures)}
+        out = [None] * len(futures)
+        try:
+            for done, fut in enumerate(as_completed(futures), start=1):
+                out[index[fut.key]] = fut.result()
+                fut.release()
+                if progress is not None:
+                    progress(done, len(futures))
+        except BaseException:
+            client.cancel(futures)
+            raise
+        passes.append((stream, len(futures)))
+        log.info("dtf pass on stream %d: %d parts, %.1f s elapsed", stream, len(futures), time.perf_counter() - t0)
+        return out
+
+    native = _kalos.render_dtf_with(sc._native, argv, run_pass)
+    from . import _arrays
+
+    img = _arrays(native.width, native.height, native.image, native.variance, native.count)
+    img.stats = json.loads(native.stats)
+    img.stats.update(seconds=time.perf_counter() - t0, passes=len(passes), parts=sum(p for _, p in passes),
+                     workers=len(client.nthreads()))
+    img.job = json.loads(native.job)
+    img.warnings = list(native.warnings)
+    img.film = None
     return img
 
 

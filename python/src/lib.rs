@@ -573,6 +573,230 @@ fn compare(
     serde_json::to_string(&m).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
+fn u32s(data: &[u8], pixels: usize, what: &str) -> PyResult<Vec<u32>> {
+    if data.len() != pixels * 4 {
+        return Err(PyValueError::new_err(format!(
+            "{what}: {} bytes, {pixels} pixels need {}",
+            data.len(),
+            pixels * 4
+        )));
+    }
+    Ok(data
+        .chunks_exact(4)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect())
+}
+
+/// One part of a DTF pass (a Dask task of `kalos.distributed`): samples `first..first+n`
+/// of every pixel (or `first..first+counts[p]`, counts as u32 bytes) of the phase with
+/// dependent tests or not, on `stream`. Returns the part's film bytes, its rays per pixel
+/// (u64 bytes, when `rays`), paths and rays.
+#[pyfunction]
+#[pyo3(signature = (scene, argv, dependent, stream, first, n, counts, rays))]
+#[allow(clippy::too_many_arguments)]
+fn render_dtf_part<'py>(
+    py: Python<'py>,
+    scene: &NativeScene,
+    argv: Vec<String>,
+    dependent: bool,
+    stream: u32,
+    first: u32,
+    n: u32,
+    counts: Option<Vec<u8>>,
+    rays: bool,
+) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, u64, u64)> {
+    use kalos::pipeline::{run_dtf_pass, Counts, DtfPass, Silent};
+    let job = parse_job(&scene.spec, &argv).map_err(value_error)?;
+    let sc = scene.scene.clone();
+    let out = py.detach(move || -> Result<_, String> {
+        let set = job.settings(&sc);
+        let pixels = set.width as usize * set.height as usize;
+        let per_pixel = match &counts {
+            Some(c) => Some(u32s(c, pixels, "counts").map_err(|e| e.to_string())?),
+            None => None,
+        };
+        let (pool, _) = kalos::render::thread_pool(job.threads)?;
+        pool.install(|| {
+            let integ = kalos::integrator::Integrator::prepare(
+                &sc,
+                set.integrator,
+                set.spectral.bands(),
+                &Silent,
+            )?;
+            let pass = DtfPass {
+                dependent,
+                stream,
+                counts: match &per_pixel {
+                    Some(v) => Counts::PerPixel(v),
+                    None => Counts::Uniform(n),
+                },
+                rays,
+            };
+            let (film, r, c) = run_dtf_pass(&sc, &integ, &set, &pass, first, &Silent)?;
+            let end = first as u64
+                + per_pixel
+                    .as_ref()
+                    .map_or(n, |v| v.iter().copied().max().unwrap_or(0)) as u64;
+            let f = FilmFile {
+                job: serde_json::to_string(&job).unwrap_or_default(),
+                key: job.key(),
+                ranges: vec![(first as u64, end)],
+                film,
+            };
+            let rb: Vec<u8> = r.iter().flat_map(|x| x.to_le_bytes()).collect();
+            Ok((film_to_bytes(&f), rb, c.paths, c.rays))
+        })
+    });
+    let (fb, rb, paths, nrays) = out.map_err(value_error)?;
+    Ok((PyBytes::new(py, &fb), PyBytes::new(py, &rb), paths, nrays))
+}
+
+/// DTF's passes handed to a Python function that splits each into parts and returns
+/// them [(film bytes, rays bytes, paths, rays), ...]; merged here exactly.
+struct PyPasses<'a> {
+    run_pass: &'a Bound<'a, PyAny>,
+    error: Option<PyErr>,
+    width: u32,
+    height: u32,
+}
+
+impl kalos::pipeline::DtfPasses for PyPasses<'_> {
+    fn run(
+        &mut self,
+        pass: kalos::pipeline::DtfPass<'_>,
+    ) -> Result<(kalos::film::Film, Vec<u64>, kalos::integrator::Counters), String> {
+        use kalos::pipeline::Counts;
+        let py = self.run_pass.py();
+        let (n, counts) = match pass.counts {
+            Counts::Uniform(n) => (n, None),
+            Counts::PerPixel(v) => {
+                let b: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+                (0, Some(PyBytes::new(py, &b)))
+            }
+        };
+        let r = self
+            .run_pass
+            .call1((pass.dependent, pass.stream, n, counts, pass.rays))
+            .and_then(|r| r.extract::<Vec<(Vec<u8>, Vec<u8>, u64, u64)>>());
+        let parts = match r {
+            Ok(p) => p,
+            Err(e) => {
+                self.error = Some(e);
+                return Err("interrupted".into());
+            }
+        };
+        let pixels = self.width as usize * self.height as usize;
+        let mut film: Option<kalos::film::Film> = None;
+        let mut rays = vec![0u64; if pass.rays { pixels } else { 0 }];
+        let mut c = kalos::integrator::Counters::default();
+        for (i, (fb, rb, paths, nrays)) in parts.iter().enumerate() {
+            let f = film_from_bytes(fb, &format!("dtf pass part {i}"))?;
+            if (f.film.width, f.film.height) != (self.width, self.height) {
+                return Err(format!("dtf pass part {i}: another film size"));
+            }
+            // (the first part's film, splats and all, then exact sums of the others)
+            match &mut film {
+                None => film = Some(f.film),
+                Some(m) => m.merge(&f.film),
+            }
+            if pass.rays {
+                if rb.len() != pixels * 8 {
+                    return Err(format!("dtf pass part {i}: no rays per pixel"));
+                }
+                for (r, b) in rays.iter_mut().zip(rb.chunks_exact(8)) {
+                    *r += u64::from_le_bytes(b.try_into().unwrap_or_default());
+                }
+            }
+            c.paths += paths;
+            c.rays += nrays;
+        }
+        let film = match film {
+            Some(f) => f,
+            None => kalos::film::Film::new(self.width, self.height)?,
+        };
+        Ok((film, rays, c))
+    }
+}
+
+/// DTF on the client with its passes run by `run_pass(dependent, stream, n, counts,
+/// rays)` (kalos.distributed: Dask tasks of `render_dtf_part`): the allocation, top-ups
+/// and the filter run here, so the image is the one-process DTF image, bit for bit.
+#[pyfunction]
+fn render_dtf_with(
+    py: Python<'_>,
+    scene: &NativeScene,
+    argv: Vec<String>,
+    run_pass: Bound<'_, PyAny>,
+) -> PyResult<NativeRendered> {
+    use kalos::pipeline::DtfBudget;
+    let job = parse_job(&scene.spec, &argv).map_err(value_error)?;
+    if job.method != kalos::render::Method::Dtf {
+        return Err(PyValueError::new_err(
+            "render_dtf_with: the job is not --method dtf",
+        ));
+    }
+    let sc = &scene.scene;
+    let set = job.settings(sc);
+    let budget = match (job.time, job.spp) {
+        (Some(_), _) => {
+            return Err(PyValueError::new_err(
+                "time: a distributed render splits a sample budget: give spp, not time",
+            ))
+        }
+        (None, Some(n)) => DtfBudget::Spp(n as f64),
+        (None, None) if job.dtf.eps_r.is_some() => DtfBudget::RelativeError,
+        (None, None) => DtfBudget::Spp(sc.defaults.spp.unwrap_or(DEFAULT_SPP) as f64),
+    };
+    let mut passes = PyPasses {
+        run_pass: &run_pass,
+        error: None,
+        width: set.width,
+        height: set.height,
+    };
+    let progress = PyProgress::default();
+    let r = kalos::pipeline::render_dtf_with(&set, &job.dtf, budget, &progress, &mut passes);
+    if let Some(e) = passes.error.take() {
+        return Err(e);
+    }
+    let run = r.map_err(value_error)?;
+    let mut film = run.independent.clone();
+    film.merge(&run.dependent);
+    let (width, height, image, variance, count) = film_arrays(py, &film, &run.out.combined);
+    let pixels = (set.width as f64) * (set.height as f64);
+    let stats = serde_json::json!({
+        "scene": sc.info.name,
+        "width": set.width,
+        "height": set.height,
+        "spp": (film.total_samples() as f64 / pixels).round() as u32,
+        "method": "dtf",
+        "seed": job.seed,
+        "seconds": run.seconds,
+        "paths": run.counters.paths,
+        "rays": run.counters.rays,
+        "interrupted": false,
+        "mean_rgb": run.out.combined.mean(),
+        "dtf": {
+            "n": run.n,
+            "average_n": run.average_n(),
+            "phase1_seconds": run.phase1_seconds,
+            "phase2_seconds": run.phase2_seconds,
+            "filter_seconds": run.filter_seconds,
+        },
+    });
+    Ok(NativeRendered {
+        width,
+        height,
+        image: image.unbind(),
+        variance: variance.unbind(),
+        count: count.unbind(),
+        stats: stats.to_string(),
+        job: serde_json::to_string(&job).unwrap_or_default(),
+        warnings: sc.warnings.clone(),
+        messages: vec![],
+        film: None,
+    })
+}
+
 /// The native module.
 #[pymodule]
 fn _kalos(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -584,6 +808,8 @@ fn _kalos(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write, m)?)?;
     m.add_function(wrap_pyfunction!(read_image, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;
+    m.add_function(wrap_pyfunction!(render_dtf_part, m)?)?;
+    m.add_function(wrap_pyfunction!(render_dtf_with, m)?)?;
     m.add_class::<NativeScene>()?;
     m.add_class::<NativeFilm>()?;
     m.add_class::<NativeRendered>()?;

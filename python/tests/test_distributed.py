@@ -59,10 +59,28 @@ def test_bad_options_are_refused_before_sending(dask_client):
         kalos.distributed.render("cornell", spp=4, client=dask_client, rr="nope")
     with pytest.raises(ValueError, match="time"):
         kalos.distributed.render("cornell", client=dask_client, time=2.0)
-    with pytest.raises(ValueError, match="plain"):
-        kalos.distributed.render("cornell", spp=4, client=dask_client, method="dtf")
+    with pytest.raises(ValueError, match="plain and dtf"):
+        kalos.distributed.render("cornell", spp=4, client=dask_client, method="rw")
     with pytest.raises(FileNotFoundError):
         kalos.distributed.render("nothere.obj", spp=4, client=dask_client)
+
+
+@pytest.mark.parametrize(
+    "opts",
+    [dict(spp=24, dtf_n=8, seed=2), dict(dtf_eps=0.25, dtf_n=8), dict(spp=8, dtf_n=4, integrator="bdpt")],
+    ids=["budget", "eps_r", "bdpt"],
+)
+def test_dtf_phases_as_tasks_give_the_one_process_image(dask_client, opts):
+    """Phase 1, phase 2 and the top-ups split into sample ranges on the workers; the
+    allocation and the filter on the client: the one-process DTF image, bit for bit."""
+    res = (16, 16)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", kalos.KalosWarning)
+        ref = kalos.render("cornell", method="dtf", res=res, **opts)
+        img = kalos.distributed.render("cornell", client=dask_client, chunk_spp=3, method="dtf", res=res, **opts)
+    assert same(img, ref)
+    assert img.stats["passes"] >= 2 and img.stats["parts"] > img.stats["passes"]
+    assert img.stats["dtf"]["n"] == ref.stats["dtf"]["n"]
 
 
 def test_a_worker_killed_mid_render_leaves_the_image_unchanged(dask_client, reference):
