@@ -30,8 +30,8 @@ pub struct FilmFile {
     pub film: Film,
 }
 
-struct W<'a>(BufWriter<&'a mut std::fs::File>);
-impl W<'_> {
+struct W<T: Write>(T);
+impl<T: Write> W<T> {
     fn b(&mut self, b: &[u8]) -> std::io::Result<()> {
         self.0.write_all(b)
     }
@@ -50,71 +50,87 @@ impl W<'_> {
     }
 }
 
+/// The film file's bytes, written to any writer.
+fn encode<T: Write>(out: T, f: &FilmFile) -> std::io::Result<T> {
+    let mut w = W(out);
+    w.b(MAGIC)?;
+    w.u32(FILM_VERSION)?;
+    w.str(&f.job)?;
+    w.str(&f.key)?;
+    w.u64(f.ranges.len() as u64)?;
+    for &(a, b) in &f.ranges {
+        w.u64(a)?;
+        w.u64(b)?;
+    }
+    let film = &f.film;
+    w.u32(film.width)?;
+    w.u32(film.height)?;
+    w.u64(film.rejected.nan)?;
+    w.u64(film.rejected.infinite)?;
+    for p in &film.pixels {
+        w.u32(p.n)?;
+        for c in 0..3 {
+            w.i128(p.sum[c])?;
+        }
+        for c in 0..3 {
+            w.i128(p.sum_sq[c])?;
+        }
+    }
+    match &film.splats {
+        None => w.b(&[0])?,
+        Some(s) => {
+            w.b(&[1])?;
+            w.u64(s.light_paths)?;
+            for &b in &s.batch_paths {
+                w.u64(b)?;
+            }
+            for i in 0..s.sum.len() {
+                for c in 0..3 {
+                    w.i128(s.sum[i][c])?;
+                }
+                for b in 0..BATCHES {
+                    w.u32(s.batch_n[i][b])?;
+                    for c in 0..3 {
+                        w.i128(s.batch_sum[i][b][c])?;
+                        w.i128(s.batch_splat[i][b][c])?;
+                    }
+                }
+            }
+        }
+    }
+    w.b(END)?;
+    Ok(w.0)
+}
+
 /// Write a film file.
 pub fn write_film(path: &Path, f: &FilmFile) -> Result<(), String> {
     let err = |e: std::io::Error| format!("{}: cannot write the film: {e}", path.display());
     let mut file = std::fs::File::create(path).map_err(err)?;
-    let mut w = W(BufWriter::new(&mut file));
-    (|| -> std::io::Result<()> {
-        w.b(MAGIC)?;
-        w.u32(FILM_VERSION)?;
-        w.str(&f.job)?;
-        w.str(&f.key)?;
-        w.u64(f.ranges.len() as u64)?;
-        for &(a, b) in &f.ranges {
-            w.u64(a)?;
-            w.u64(b)?;
-        }
-        let film = &f.film;
-        w.u32(film.width)?;
-        w.u32(film.height)?;
-        w.u64(film.rejected.nan)?;
-        w.u64(film.rejected.infinite)?;
-        for p in &film.pixels {
-            w.u32(p.n)?;
-            for c in 0..3 {
-                w.i128(p.sum[c])?;
-            }
-            for c in 0..3 {
-                w.i128(p.sum_sq[c])?;
-            }
-        }
-        match &film.splats {
-            None => w.b(&[0])?,
-            Some(s) => {
-                w.b(&[1])?;
-                w.u64(s.light_paths)?;
-                for &b in &s.batch_paths {
-                    w.u64(b)?;
-                }
-                for i in 0..s.sum.len() {
-                    for c in 0..3 {
-                        w.i128(s.sum[i][c])?;
-                    }
-                    for b in 0..BATCHES {
-                        w.u32(s.batch_n[i][b])?;
-                        for c in 0..3 {
-                            w.i128(s.batch_sum[i][b][c])?;
-                            w.i128(s.batch_splat[i][b][c])?;
-                        }
-                    }
-                }
-            }
-        }
-        w.b(END)?;
-        w.0.flush()
-    })()
-    .map_err(err)?;
+    let mut w = encode(BufWriter::new(&mut file), f).map_err(err)?;
+    w.flush().map_err(err)?;
     drop(w);
     file.sync_all().map_err(err)
 }
 
-struct R<'a> {
-    r: BufReader<std::fs::File>,
-    path: &'a Path,
+/// A film file's bytes in memory (what `write_film` writes): a shard of a distributed
+/// render travels as these, without a shared disk.
+pub fn film_to_bytes(f: &FilmFile) -> Vec<u8> {
+    let px = f.film.pixels.len();
+    let splat = f
+        .film
+        .splats
+        .as_ref()
+        .map_or(0, |_| px * (48 + BATCHES * 100));
+    let cap = 64 + f.job.len() + f.key.len() + 16 * f.ranges.len() + 100 * px + splat;
+    encode(Vec::with_capacity(cap), f).expect("writing to memory cannot fail")
+}
+
+struct R<'a, T: Read> {
+    r: T,
+    name: &'a str,
     left: u64,
 }
-impl R<'_> {
+impl<T: Read> R<'_, T> {
     fn b<const K: usize>(&mut self) -> Result<[u8; K], String> {
         let mut buf = [0u8; K];
         self.r.read_exact(&mut buf).map_err(|_| self.short())?;
@@ -124,7 +140,7 @@ impl R<'_> {
     fn short(&self) -> String {
         format!(
             "{}: the film file is truncated (or not a kalos film)",
-            self.path.display()
+            self.name
         )
     }
     fn u32(&mut self) -> Result<u32, String> {
@@ -144,8 +160,7 @@ impl R<'_> {
         let mut v = vec![0u8; n as usize];
         self.r.read_exact(&mut v).map_err(|_| self.short())?;
         self.left -= n;
-        String::from_utf8(v)
-            .map_err(|_| format!("{}: the film's job is not UTF-8", self.path.display()))
+        String::from_utf8(v).map_err(|_| format!("{}: the film's job is not UTF-8", self.name))
     }
 }
 
@@ -156,22 +171,44 @@ pub fn read_film(path: &Path) -> Result<FilmFile, String> {
         return Err(format!("{}: not a regular file", path.display()));
     }
     let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut r = R {
+    let name = path.display().to_string();
+    decode(R {
         r: BufReader::new(file),
-        path,
+        name: &name,
         left: meta.len(),
-    };
+    })
+    .map(|(f, _)| f)
+}
+
+/// A film file from its bytes (`film_to_bytes`), checked as `read_film` checks a file,
+/// and refused if anything follows its end mark. `name` starts the error messages.
+pub fn film_from_bytes(bytes: &[u8], name: &str) -> Result<FilmFile, String> {
+    let (f, left) = decode(R {
+        r: bytes,
+        name,
+        left: bytes.len() as u64,
+    })?;
+    if left != 0 {
+        return Err(format!(
+            "{name}: {left} bytes after the film's end mark (not one kalos film)"
+        ));
+    }
+    Ok(f)
+}
+
+/// The film and the bytes left after its end mark.
+fn decode<T: Read>(mut r: R<'_, T>) -> Result<(FilmFile, u64), String> {
+    let name = r.name;
     let magic: [u8; 10] = r
         .b()
-        .map_err(|_| format!("{}: not a kalos film file", path.display()))?;
+        .map_err(|_| format!("{name}: not a kalos film file"))?;
     if &magic != MAGIC {
-        return Err(format!("{}: not a kalos film file", path.display()));
+        return Err(format!("{name}: not a kalos film file"));
     }
     let version = r.u32()?;
     if version != FILM_VERSION {
         return Err(format!(
-            "{}: film file version {version}, this kalos reads version {FILM_VERSION}",
-            path.display()
+            "{name}: film file version {version}, this kalos reads version {FILM_VERSION}"
         ));
     }
     let job = r.str()?;
@@ -193,7 +230,7 @@ pub fn read_film(path: &Path) -> Result<FilmFile, String> {
     if pixels.saturating_mul(100) > r.left {
         return Err(r.short());
     }
-    check_resolution(width, height).map_err(|e| format!("{}: {e}", path.display()))?;
+    check_resolution(width, height).map_err(|e| format!("{name}: {e}"))?;
     let mut film = Film::new(width, height)?;
     film.rejected = Rejections {
         nan: r.u64()?,
@@ -237,21 +274,21 @@ pub fn read_film(path: &Path) -> Result<FilmFile, String> {
         }
         film.splats = Some(Box::new(s));
     } else if flag != 0 {
-        return Err(format!(
-            "{}: damaged film file (splat flag {flag})",
-            path.display()
-        ));
+        return Err(format!("{name}: damaged film file (splat flag {flag})"));
     }
     let end: [u8; 4] = r.b()?;
     if &end != END {
         return Err(r.short());
     }
-    Ok(FilmFile {
-        job,
-        key,
-        ranges,
-        film,
-    })
+    Ok((
+        FilmFile {
+            job,
+            key,
+            ranges,
+            film,
+        },
+        r.left,
+    ))
 }
 
 /// Merge film files: the same job key, the same size, disjoint sample ranges. The result

@@ -20,7 +20,9 @@ mod file;
 mod splat;
 mod stats;
 
-pub use file::{merge_files, read_film, write_film, FilmFile, FILM_VERSION};
+pub use file::{
+    film_from_bytes, film_to_bytes, merge_files, read_film, write_film, FilmFile, FILM_VERSION,
+};
 pub use splat::{SplatFilm, BATCHES};
 pub use stats::{PixelStats, Rejections};
 

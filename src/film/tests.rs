@@ -140,3 +140,49 @@ fn film_file_round_trip_and_refusals() {
     assert!(e.contains("overlap"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A film part in memory is the file's bytes: the same bytes, the same film back, and the
+/// same refusals (truncated, another version, trailing bytes), named by the given name.
+#[test]
+fn film_bytes_are_the_file_and_refused_alike() {
+    let dir = std::env::temp_dir().join(format!("kalos-film-bytes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for splats in [false, true] {
+        let mut f = if splats {
+            Film::with_splats(4, 3).unwrap()
+        } else {
+            Film::new(4, 3).unwrap()
+        };
+        for k in 0..7u32 {
+            f.add_sample(k as usize % 12, k, [k as f32 * 0.3, 0.5, -1.0]);
+            if let Some(s) = f.splats.as_mut() {
+                s.add_splat(5, k, [0.125; 3]);
+                s.add_light_path(k);
+            }
+        }
+        let ff = FilmFile {
+            job: r#"{"scene":"cornell"}"#.into(),
+            key: "k".into(),
+            ranges: vec![(8, 15)],
+            film: f,
+        };
+        let bytes = film_to_bytes(&ff);
+        let p = dir.join("b.kfilm");
+        write_film(&p, &ff).unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), bytes);
+        assert_eq!(film_from_bytes(&bytes, "part 3").unwrap(), ff);
+        for cut in [0, 5, 20, bytes.len() / 2, bytes.len() - 1] {
+            let e = film_from_bytes(&bytes[..cut], "part 3").unwrap_err();
+            assert!(e.starts_with("part 3: "), "{e}");
+            assert!(!e.contains('\n'), "{e}");
+        }
+        let mut v = bytes.clone();
+        v[10] = 99;
+        assert!(film_from_bytes(&v, "p").unwrap_err().contains("version 99"));
+        let mut long = bytes.clone();
+        long.extend_from_slice(b"xy");
+        let e = film_from_bytes(&long, "p").unwrap_err();
+        assert!(e.contains("2 bytes after"), "{e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

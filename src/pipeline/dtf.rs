@@ -61,6 +61,78 @@ impl DtfRun {
     }
 }
 
+/// One pass of the method: dependent tests (phase 1) or not, the random stream, the
+/// samples each pixel takes (indices 0..count), and whether rays per pixel are wanted.
+#[derive(Clone, Copy, Debug)]
+pub struct DtfPass<'a> {
+    pub dependent: bool,
+    pub stream: u32,
+    pub counts: Counts<'a>,
+    pub rays: bool,
+}
+
+/// What runs DTF's passes: `LocalPasses` here, or anything that splits a pass into
+/// sample ranges run elsewhere and merges them exactly (the Python module's Dask tasks).
+/// Returns the pass's film, rays per pixel (empty unless asked) and counters.
+pub trait DtfPasses {
+    fn run(&mut self, pass: DtfPass<'_>) -> Result<(Film, Vec<u64>, Counters), String>;
+}
+
+/// Samples `first_index..first_index + count` of every pixel of a DTF pass, rendered here
+/// (a part of a pass split into sample ranges; the whole pass from 0).
+pub fn run_dtf_pass(
+    scene: &Scene,
+    integrator: &Integrator,
+    set: &RenderSettings,
+    pass: &DtfPass<'_>,
+    first_index: u32,
+    progress: &dyn Progress,
+) -> Result<(Film, Vec<u64>, Counters), String> {
+    let mut s = *set;
+    s.sampler.dependent = pass.dependent;
+    let dep;
+    let integrator = if pass.dependent {
+        dep = integrator.for_dependent_phase();
+        &dep
+    } else {
+        integrator
+    };
+    let mut film = Film::new(set.width, set.height)?;
+    let mut rays = vec![0u64; if pass.rays { film.pixels.len() } else { 0 }];
+    let p = Pass {
+        scene,
+        integrator,
+        set: &s,
+        counts: pass.counts,
+        first_index,
+        stream: pass.stream,
+        progress,
+    };
+    let c = render_pass(&p, &mut film, pass.rays.then_some(&mut rays[..]));
+    Ok((film, rays, c))
+}
+
+/// DTF's passes rendered in this process.
+pub struct LocalPasses<'a> {
+    pub scene: &'a Scene,
+    pub integrator: &'a Integrator,
+    pub set: &'a RenderSettings,
+    pub progress: &'a dyn Progress,
+}
+
+impl DtfPasses for LocalPasses<'_> {
+    fn run(&mut self, pass: DtfPass<'_>) -> Result<(Film, Vec<u64>, Counters), String> {
+        run_dtf_pass(
+            self.scene,
+            self.integrator,
+            self.set,
+            &pass,
+            0,
+            self.progress,
+        )
+    }
+}
+
 /// Run the whole method. `set.sampler.dependent` is ignored: the phases set it.
 pub fn render_dtf(
     scene: &Scene,
@@ -69,6 +141,24 @@ pub fn render_dtf(
     params: &DtfParams,
     budget: DtfBudget,
     progress: &dyn Progress,
+) -> Result<DtfRun, String> {
+    let mut local = LocalPasses {
+        scene,
+        integrator,
+        set,
+        progress,
+    };
+    render_dtf_with(set, params, budget, progress, &mut local)
+}
+
+/// The method with its passes run by `passes` (the allocation, top-ups and filter here).
+/// The same passes give the same bits, wherever they ran.
+pub fn render_dtf_with(
+    set: &RenderSettings,
+    params: &DtfParams,
+    budget: DtfBudget,
+    progress: &dyn Progress,
+    passes: &mut dyn DtfPasses,
 ) -> Result<DtfRun, String> {
     params.validate()?;
     let t0 = Instant::now();
@@ -83,36 +173,21 @@ pub fn render_dtf(
     progress.begin("samples", planned);
 
     // Phase of dependent tests: C_d, sigma^2 from n samples sharing random numbers.
-    let mut dep_set = *set;
-    dep_set.sampler.dependent = true;
-    let mut dependent = Film::new(set.width, set.height)?;
-    let mut rays = vec![0u64; pixels];
-    let dep_integrator = integrator.for_dependent_phase();
-    let pass = |integrator: &Integrator,
-                set: &RenderSettings,
-                counts: Counts,
-                stream: u32,
-                film: &mut Film,
-                rays: Option<&mut [u64]>| {
-        let p = Pass {
-            scene,
-            integrator,
-            set,
-            counts,
-            first_index: 0,
-            stream,
-            progress,
-        };
-        render_pass(&p, film, rays)
-    };
-    let mut counters = pass(
-        &dep_integrator,
-        &dep_set,
-        Counts::Uniform(n),
-        0,
-        &mut dependent,
-        Some(&mut rays),
-    );
+    let (dependent, rays, mut counters) = passes.run(DtfPass {
+        dependent: true,
+        stream: 0,
+        counts: Counts::Uniform(n),
+        rays: true,
+    })?;
+    if rays.len() != pixels || (dependent.width, dependent.height) != (set.width, set.height) {
+        return Err(format!(
+            "dtf: phase 1 gave {} rays counts for a {}x{} film, {} pixels wanted",
+            rays.len(),
+            dependent.width,
+            dependent.height,
+            pixels
+        ));
+    }
     let phase1_seconds = t0.elapsed().as_secs_f64();
     // c[p]: rays per sample in pixel p, relative to the image mean (cost-aware allocation).
     let mean_rays = rays.iter().sum::<u64>() as f64 / pixels.max(1) as f64;
@@ -165,19 +240,14 @@ pub fn render_dtf(
 
     // Phase of independent tests: N[p] samples from a stream independent of phase 1.
     let t1 = Instant::now();
-    let mut ind_set = *set;
-    ind_set.sampler.dependent = false;
-    let mut independent = Film::new(set.width, set.height)?;
     planned += alloc.iter().map(|&a| a as u64).sum::<u64>();
     progress.set_total(planned);
-    let c2 = pass(
-        integrator,
-        &ind_set,
-        Counts::PerPixel(&alloc),
-        1,
-        &mut independent,
-        None,
-    );
+    let (mut independent, _, c2) = passes.run(DtfPass {
+        dependent: false,
+        stream: 1,
+        counts: Counts::PerPixel(&alloc),
+        rays: false,
+    })?;
     counters.add(&c2);
 
     // Top-up rounds from the statistics of all samples so far (`filter::dtf::top_up` for
@@ -222,17 +292,14 @@ pub fn render_dtf(
         if extra.iter().all(|&e| e == 0) {
             break;
         }
-        let mut more = Film::new(set.width, set.height)?;
         planned += extra.iter().map(|&a| a as u64).sum::<u64>();
         progress.set_total(planned);
-        let c = pass(
-            integrator,
-            &ind_set,
-            Counts::PerPixel(&extra),
-            2 + round,
-            &mut more,
-            None,
-        );
+        let (more, _, c) = passes.run(DtfPass {
+            dependent: false,
+            stream: 2 + round,
+            counts: Counts::PerPixel(&extra),
+            rays: false,
+        })?;
         counters.add(&c);
         independent.merge(&more);
         alloc.iter_mut().zip(&extra).for_each(|(a, &e)| *a += e);

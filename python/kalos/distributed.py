@@ -1,0 +1,263 @@
+"""Renders spread over a Dask cluster: a render's samples split into sample ranges, each a
+Dask task that renders its range on whichever worker gets it and returns the film part's
+bytes (the ``.kfilm`` format, so no shared disk is needed); the client merges the parts
+in a fixed order. Film sums are exact integers and each sample is a pure function of
+(seed, pixel, sample index), so the image is the one-process render's, bit for bit,
+whatever the number of workers, whichever worker ran what, and whatever Dask re-ran after
+losing a worker.
+
+>>> from dask.distributed import Client, LocalCluster
+>>> import kalos.distributed
+>>> client = Client(LocalCluster(n_workers=2, threads_per_worker=1))
+>>> img = kalos.distributed.render("cornell", spp=256, client=client, chunk_spp=32)
+
+Workers need the ``kalos`` package (the same version) and, for scene files, the file at
+the same path (built-in scenes need nothing).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+import threading
+import time
+import uuid
+from typing import Any, Callable, Dict, List, Optional, Tuple, Union
+
+from . import Film, RenderResult, Scene, _argv, _kalos, job as _job, load, merge as _merge
+
+log = logging.getLogger("kalos.distributed")
+
+__all__ = ["render", "render_dtf_part", "render_part", "sample_ranges"]
+
+_SCENES: Dict[Tuple[str, Optional[float]], Scene] = {}
+_SCENES_LOCK = threading.Lock()
+_SCENES_KEPT = 4
+
+
+def _cached_scene(spec: str) -> Scene:
+    """The scene, loaded once per worker process (and again if the file changed)."""
+    key = (spec, os.path.getmtime(spec) if os.path.isfile(spec) else None)
+    with _SCENES_LOCK:
+        s = _SCENES.get(key)
+    if s is None:
+        s = load(spec)
+        with _SCENES_LOCK:
+            if len(_SCENES) >= _SCENES_KEPT:
+                _SCENES.clear()
+            _SCENES[key] = s
+    return s
+
+
+def render_part(spec: str, argv: List[str], first: int, spp: int) -> Tuple[bytes, str]:
+    """One task: render samples ``first..first+spp`` of the job ``argv`` describes (a
+    ``kalos render`` argument vector without --spp/--first-sample) and return the film
+    part's bytes and the part's stats (JSON)."""
+    scene = _cached_scene(spec)
+    out = _kalos.render(scene._native, list(argv) + [f"--first-sample={first}", f"--spp={spp}"], None)
+    return out.film.to_bytes(), out.stats
+
+
+def sample_ranges(first: int, spp: int, chunk_spp: int) -> List[Tuple[int, int]]:
+    """The tasks' sample ranges: (first sample, samples) covering first..first+spp."""
+    if chunk_spp < 1:
+        raise ValueError(f"chunk_spp: must be at least 1, not {chunk_spp}")
+    return [(a, min(chunk_spp, first + spp - a)) for a in range(first, first + spp, chunk_spp)]
+
+
+def render(
+    scene: Union[str, os.PathLike, Scene],
+    spp: Optional[int] = None,
+    *,
+    client: Any = None,
+    chunk_spp: Optional[int] = None,
+    progress: Optional[Callable[[int, int], Any]] = None,
+    retries: int = 1,
+    **options: Any,
+) -> RenderResult:
+    """Render ``scene`` with ``spp`` samples per pixel (default: the scene's) on a Dask
+    cluster: tasks of ``chunk_spp`` samples each (default: about two tasks per worker
+    thread), merged on the client in sample order. Every other keyword is an option of
+    ``kalos.render`` (``seed``, ``res``, ``rr``, ``threads`` per task, ...).
+
+    ``client`` is a ``distributed.Client`` (default: the current one). ``progress(done,
+    total)`` is called as parts complete (parts done, parts planned); each part is also
+    logged on the ``kalos.distributed`` logger. Tasks lost with a worker are re-run by
+    Dask; ``retries`` re-runs a task that raised. Returns the ``RenderResult`` of the
+    merged film: the same image as ``kalos.render(scene, spp=spp, **options)``.
+
+    ``method="plain"`` (the default) and ``method="dtf"`` (each phase's pass split into
+    sample ranges of about ``chunk_spp`` x pixels samples; the allocation, top-ups and
+    filter on the client) with a sample budget
+    or ``dtf_eps`` (not ``time``) can be distributed. Raises ValueError for bad options before anything is sent."""
+    try:
+        from distributed import as_completed, get_client
+    except ImportError as e:  # pragma: no cover - depends on the environment
+        raise ImportError("kalos.distributed needs Dask: pip install dask distributed") from e
+    if options.get("time") is not None:
+        raise ValueError("time: a distributed render splits a sample budget: give spp, not time")
+    method = options.get("method") or "plain"
+    if method not in ("plain", "dtf"):
+        raise ValueError(f"method {method!r}: only plain and dtf renders are distributed so far")
+    if client is None:
+        client = get_client()
+    sc = scene if isinstance(scene, Scene) else load(scene)
+    spec = sc.spec
+    if os.path.exists(spec) and spec not in _kalos_builtin_names():
+        spec = os.path.abspath(spec)
+    if method == "dtf":
+        return _render_dtf(client, sc, spec, spp, chunk_spp, progress, retries, options)
+    first = int(options.pop("first_sample", None) or 0)
+    spp = int(spp) if spp is not None else sc.default_spp
+    # the client refuses bad options before any task is sent (the CLI's messages)
+    _job(spec, spp=spp, first_sample=first, **options)
+    argv = _argv(options)
+    if chunk_spp is None:
+        threads = max(1, sum(client.nthreads().values()))
+        chunk_spp = max(1, math.ceil(spp / (2 * threads)))
+    ranges = sample_ranges(first, spp, int(chunk_spp))
+    token = uuid.uuid4().hex[:12]
+    t0 = time.perf_counter()
+    futures = [
+        client.submit(render_part, spec, argv, a, n, key=f"kalos-part-{token}-{i}", pure=False, retries=retries)
+        for i, (a, n) in enumerate(ranges)
+    ]
+    index = {f.key: i for i, f in enumerate(futures)}
+    parts: Dict[int, Film] = {}
+    stats: List[Dict[str, Any]] = [{} for _ in ranges]
+    merged: Optional[Film] = None
+    next_i = 0
+    try:
+        for done, fut in enumerate(as_completed(futures), start=1):
+            i = index[fut.key]
+            data, st = fut.result()
+            a, n = ranges[i]
+            parts[i] = Film.from_bytes(data, f"part {i} (samples {a}..{a + n})")
+            stats[i] = json.loads(st)
+            fut.release()
+            # merge the parts in sample order as soon as they are contiguous
+            while next_i in parts:
+                p = parts.pop(next_i)
+                merged = p if merged is None else _merge([merged, p])
+                next_i += 1
+            log.info(
+                "part %d/%d done (samples %d..%d, %.2f s in the task), %.1f s elapsed",
+                done, len(ranges), a, a + n, stats[i].get("seconds", 0.0), time.perf_counter() - t0,
+            )
+            if progress is not None:
+                progress(done, len(ranges))
+    except BaseException:
+        client.cancel(futures)
+        raise
+    assert merged is not None and next_i == len(ranges)
+    img = merged.image()
+    s0 = stats[0]
+    img.stats = {
+        **{k: s0[k] for k in ("scene", "width", "height", "threads", "spectral", "sampler", "dependent",
+                              "max_depth", "integrator", "rr", "rr_weight", "rr_min_depth", "bsdf_select",
+                              "seed", "method") if k in s0},
+        "spp": spp,
+        "first_sample": first,
+        "seconds": time.perf_counter() - t0,
+        "task_seconds": sum(s.get("seconds", 0.0) for s in stats),
+        "paths": sum(s.get("paths", 0) for s in stats),
+        "rays": sum(s.get("rays", 0) for s in stats),
+        "rejected_samples": sum(s.get("rejected_samples", 0) for s in stats),
+        "parts": len(ranges),
+        "chunk_spp": int(chunk_spp),
+        "workers": len(client.nthreads()),
+        "interrupted": False,
+        "mean_rgb": [float(img[..., c].mean(dtype="float64")) for c in range(3)],
+    }
+    img.warnings = []
+    return img
+
+
+def render_dtf_part(spec: str, argv: List[str], dependent: bool, stream: int, first: int, n: int,
+                    counts: Optional[bytes], rays: bool) -> Tuple[bytes, bytes, int, int]:
+    """One task of a DTF pass: samples ``first..first+n`` of every pixel (or
+    ``first..first+counts[p]``) of the phase; returns the film bytes, rays per pixel, paths
+    and rays."""
+    scene = _cached_scene(spec)
+    return _kalos.render_dtf_part(scene._native, list(argv), dependent, stream, first, n, counts, rays)
+
+
+def _balanced_ranges(per_index, target: int) -> List[Tuple[int, int]]:
+    """Sample index ranges (first, count) holding about ``target`` samples each, given the
+    samples at each index (a DTF pass's per-pixel counts fall off with the index)."""
+    target = max(1, int(target))
+    ranges, a, acc = [], 0, 0
+    for j, c in enumerate(per_index.tolist()):
+        acc += c
+        if acc >= target:
+            ranges.append((a, j + 1 - a))
+            a, acc = j + 1, 0
+    if a < len(per_index):
+        ranges.append((a, len(per_index) - a))
+    return ranges or [(0, 0)]
+
+
+def _render_dtf(client, sc, spec, spp, chunk_spp, progress, retries, options) -> RenderResult:
+    """DTF on the cluster: each pass (phase 1, phase 2, top-ups) split into sample ranges
+    as tasks; the allocation, top-ups and filter run on the client (in Rust)."""
+    import numpy as np
+    from distributed import as_completed
+
+    if options.get("first_sample"):
+        raise ValueError("first_sample: a dtf render is not a sample range")
+    argv = _argv(dict(options, spp=spp))
+    threads = max(1, sum(client.nthreads().values()))
+    w, h = _job(spec, **dict(options, spp=spp))["res"] or sc.info()["default_res"] or (256, 256)
+    native_pixels = int(w) * int(h)
+    token = uuid.uuid4().hex[:12]
+    t0 = time.perf_counter()
+    passes = []
+
+    def run_pass(dependent, stream, n, counts, rays):
+        arr = None if counts is None else np.frombuffer(counts, dtype="<u4").astype(np.int64)
+        pixels = native_pixels
+        # samples at each index j: all pixels (uniform) or those whose count exceeds j
+        if arr is None:
+            per_index = np.full(n, pixels, dtype=np.int64)
+        else:
+            hist = np.bincount(arr, minlength=int(arr.max(initial=0)) + 1)
+            per_index = pixels - np.cumsum(hist)[:-1]
+        ranges = _balanced_ranges(per_index, pixels * int(chunk_spp) if chunk_spp
+                                  else math.ceil(int(per_index.sum()) / (2 * threads)))
+        futures = []
+        for i, (a, k) in enumerate(ranges):
+            part = None if arr is None else np.clip(arr - a, 0, k).astype("<u4").tobytes()
+            futures.append(client.submit(render_dtf_part, spec, argv, dependent, stream, a, k, part, rays,
+                                         key=f"kalos-dtf-{token}-s{stream}-{i}", pure=False, retries=retries))
+        index = {f.key: i for i, f in enumerate(futures)}
+        out = [None] * len(futures)
+        try:
+            for done, fut in enumerate(as_completed(futures), start=1):
+                out[index[fut.key]] = fut.result()
+                fut.release()
+                if progress is not None:
+                    progress(done, len(futures))
+        except BaseException:
+            client.cancel(futures)
+            raise
+        passes.append((stream, len(futures)))
+        log.info("dtf pass on stream %d: %d parts, %.1f s elapsed", stream, len(futures), time.perf_counter() - t0)
+        return out
+
+    native = _kalos.render_dtf_with(sc._native, argv, run_pass)
+    from . import _arrays
+
+    img = _arrays(native.width, native.height, native.image, native.variance, native.count)
+    img.stats = json.loads(native.stats)
+    img.stats.update(seconds=time.perf_counter() - t0, passes=len(passes), parts=sum(p for _, p in passes),
+                     workers=len(client.nthreads()))
+    img.job = json.loads(native.job)
+    img.warnings = list(native.warnings)
+    img.film = None
+    return img
+
+
+def _kalos_builtin_names() -> List[str]:
+    return [n for n, _ in _kalos.scenes()]
