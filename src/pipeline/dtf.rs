@@ -398,11 +398,10 @@ mod tests {
     }
 
     /// DTF over BDPT: the splats are in C_d and C_i (the filter reads the film's values),
-    /// and the furnace is 1 within noise.
-    /// KNOWN FAILURE (not yet understood, see the branch's report): seed 3 gives a combined
-    /// mean of 0.933 with dependent 0.919, independent 0.998, filtered 0.999, plain 0.995.
+    /// and the furnace is 1 within noise. (It failed, combined 0.933 with dependent 0.919
+    /// on seed 3, until C_d was displayed at phase 2's local brightness and the top-up
+    /// stopped deciding from a pixel's own phase-2 samples.)
     #[test]
-    #[ignore]
     fn dtf_over_bdpt_furnace_is_one() {
         let (d, plain) = run("furnace", 16, 64, 3);
         eprintln!(
