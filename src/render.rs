@@ -605,6 +605,25 @@ mod tests {
         assert!(e.contains("--filter energy"), "{e}");
     }
 
+    /// `--time` covers the preprocess: a budget the radiosity solve alone exceeds is said,
+    /// and one pass is rendered.
+    #[test]
+    fn time_budget_counts_the_preprocess() {
+        let scene = crate::scene::load("cornell").unwrap();
+        let mut j = RenderJob::new("cornell");
+        j.res = Some((8, 8));
+        j.time = Some(1e-6);
+        j.gather = Gather::Radiosity;
+        j.radiosity.max_area = Some(0.5);
+        let r = render_scene(&scene, &j, &crate::progress::Silent).unwrap();
+        assert!(
+            r.warnings.iter().any(|w| w.contains("the preprocess took")),
+            "{:?}",
+            r.warnings
+        );
+        assert!(r.film.total_samples() >= 64, "one pass is rendered");
+    }
+
     #[test]
     fn key_ignores_the_sample_range_only() {
         let mut a = RenderJob::new("cornell");

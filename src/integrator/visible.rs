@@ -95,47 +95,29 @@ fn trace<const N: usize>(
             Bsdf::Dielectric(d) => {
                 // E over the Fresnel choice: F x (reflection, weight 1) +
                 // (1 - F) x (refraction, weight eta_r^2).
-                let (f, _, eta_r) = fresnel_dielectric(wo_l.z, d.eta);
+                let (f, _, _) = fresnel_dielectric(wo_l.z, d.eta);
                 let refl = d.sample::<N>(wo_l, 0.0).filter(|_| f > 0.0);
                 let refr = d
                     .sample::<N>(wo_l, 1.0)
                     .filter(|b| f < 1.0 && b.wi.z * wo_l.z < 0.0);
-                let _ = eta_r;
-                match (refl, refr) {
+                // Both branches: the reflection recursively, the refraction in this loop.
+                let (bs, p) = match (refl, refr) {
                     (Some(a), Some(b)) if branches < MAX_BRANCH_DEPTH => {
                         if let Some(r) = next(a.wi) {
-                            l += trace(
-                                scene,
-                                r,
-                                beta * (a.weight * f),
-                                segments + 1,
-                                max_segments,
-                                branches + 1,
-                                c,
-                            );
+                            let w = beta * (a.weight * f);
+                            l += trace(scene, r, w, segments + 1, max_segments, branches + 1, c);
                         }
-                        let Some(r) = next(b.wi) else {
-                            return l;
-                        };
-                        beta *= b.weight * (1.0 - f);
-                        ray = r;
+                        (b, 1.0 - f)
                     }
-                    (Some(a), _) => {
-                        let Some(r) = next(a.wi) else {
-                            return l;
-                        };
-                        beta *= a.weight * f;
-                        ray = r;
-                    }
-                    (None, Some(b)) => {
-                        let Some(r) = next(b.wi) else {
-                            return l;
-                        };
-                        beta *= b.weight * (1.0 - f);
-                        ray = r;
-                    }
+                    (Some(a), _) => (a, f),
+                    (None, Some(b)) => (b, 1.0 - f),
                     (None, None) => return l,
-                }
+                };
+                let Some(r) = next(bs.wi) else {
+                    return l;
+                };
+                beta *= bs.weight * p;
+                ray = r;
             }
             _ => return l,
         }
