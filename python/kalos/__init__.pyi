@@ -1,5 +1,5 @@
 # Type stub of the kalos package. The keyword options of render() and job() are those of
-# `kalos render` (tests/test_options.py checks that this list is exactly RenderJob's, with
+# `kalos render` (python/tests/test_module.py::test_stub_lists_exactly_the_options checks that this list is exactly RenderJob's, with
 # the same choices, so the stub cannot drift from the CLI).
 import os
 from typing import Any, Callable, Dict, Iterable, List, Literal, Optional, Sequence, Tuple, Union
@@ -99,12 +99,17 @@ def render(
     dtf_no_cost: Optional[bool] = ...,
     dtf_rounds: Optional[int] = ...,
     dtf_topup: Optional[float] = ...,
+    dtf_topup_own: Optional[bool] = ...,
     dtf_stop_ratio: Optional[float] = ...,
     dtf_guard: Optional[float] = ...,
+    dtf_paper_display: Optional[bool] = ...,
     rw_d: Optional[float] = ...,
     rw_t: Optional[float] = ...,
     rw_pilot_res: Optional[int] = ...,
     rw_no_filter: Optional[bool] = ...,
+    rw_filter_emitters: Optional[bool] = ...,
+    rw_pixel_test: Optional[bool] = ...,
+    filter: Optional[Literal['energy']] = ...,
 ) -> RenderResult: ...
 def job(
     scene: SceneLike = ...,
@@ -148,12 +153,17 @@ def job(
     dtf_no_cost: Optional[bool] = ...,
     dtf_rounds: Optional[int] = ...,
     dtf_topup: Optional[float] = ...,
+    dtf_topup_own: Optional[bool] = ...,
     dtf_stop_ratio: Optional[float] = ...,
     dtf_guard: Optional[float] = ...,
+    dtf_paper_display: Optional[bool] = ...,
     rw_d: Optional[float] = ...,
     rw_t: Optional[float] = ...,
     rw_pilot_res: Optional[int] = ...,
     rw_no_filter: Optional[bool] = ...,
+    rw_filter_emitters: Optional[bool] = ...,
+    rw_pixel_test: Optional[bool] = ...,
+    filter: Optional[Literal['energy']] = ...,
 ) -> Dict[str, Any]: ...
 def merge(parts: Iterable[Union[Film, bytes, str, os.PathLike[str]]]) -> Film: ...
 def write(path: Union[str, os.PathLike[str]], img: Any, exposure: float = ..., aovs: bool = ...) -> None: ...
