@@ -20,6 +20,10 @@ def interrupt_by_signal():
 
 @pytest.mark.parametrize("send", [_thread.interrupt_main, interrupt_by_signal], ids=["interrupt_main", "SIGINT"])
 def test_ctrl_c_stops_a_long_render(send):
+    # A shell starts a background job (`cmd &`, nohup) with SIGINT ignored; Python then
+    # keeps it ignored. Give the test Python's own handler, as an interactive session has.
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     scene = kalos.load("cornell")
     seen = []
