@@ -630,6 +630,45 @@ fn two_outputs_on_one_path_are_refused() {
 }
 
 #[test]
+fn dask_renders_without_python_or_with_a_time_budget_are_refused() {
+    let d = temp_dir("dask");
+    let out = d.join("x.exr").display().to_string();
+    let run = |python: &str, extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "cornell",
+            "-o",
+            &out,
+            "--dask",
+            "tcp://127.0.0.1:9",
+        ];
+        args.extend_from_slice(extra);
+        let o = Command::new(env!("CARGO_BIN_EXE_kalos"))
+            .args(&args)
+            .env("KALOS_PYTHON", python)
+            .output()
+            .unwrap();
+        (
+            o.status.code().unwrap_or(-1),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (code, err) = run("/nonexistent/python3", &[]);
+    assert_one_line_error(
+        "no python",
+        code,
+        &err,
+        1,
+        &["--dask", "cannot run", "KALOS_PYTHON"],
+    );
+    let (code, err) = run("/nonexistent/python3", &["--time", "2"]);
+    assert_one_line_error("--time", code, &err, 1, &["--dask", "--spp, not --time"]);
+    let (code, err) = run("/nonexistent/python3", &["--method", "rw"]);
+    assert_one_line_error("rw", code, &err, 1, &["--dask", "plain and dtf"]);
+    assert!(!Path::new(&out).exists(), "nothing is written");
+}
+
+#[test]
 fn black_images_and_ignored_options_are_warned() {
     let d = temp_dir("warn");
     // a camera looking away from the Cornell box: all black

@@ -261,3 +261,129 @@ def _render_dtf(client, sc, spec, spp, chunk_spp, progress, retries, options) ->
 
 def _kalos_builtin_names() -> List[str]:
     return [n for n, _ in _kalos.scenes()]
+
+
+# --- `kalos render --dask` (`python -m kalos render --dask`): the command line ----------
+
+_CLI_USAGE = (
+    "usage: kalos render --dask ADDRESS [--dask-chunk-spp N] SCENE "
+    "[kalos render options] [-o OUT] [--stats FILE] [--aovs] [--exposure STOPS] [-q]"
+)
+
+
+def _parse_cli(argv: List[str]) -> Dict[str, Any]:
+    """``kalos render``'s argument vector -> the scene, the render keywords and the
+    outputs. Options of the job are looked up in the CLI's own table (``kalos.options()``),
+    so names and values are checked by the same clap definition as the CLI's."""
+    from . import _BY_NAME
+
+    by_flag = {o["flag"]: o for o in _BY_NAME.values()}
+    out: Dict[str, Any] = dict(scheduler=None, chunk_spp=None, scene=None, output="out.exr", stats=None,
+                               aovs=False, exposure=0.0, quiet=False, options={})
+    own_values = {"--dask": "scheduler", "--dask-chunk-spp": "chunk_spp", "-o": "output", "--output": "output",
+                  "--stats": "stats", "--exposure": "exposure"}
+    own_flags = {"--aovs": "aovs", "-q": "quiet", "--quiet": "quiet"}
+    not_here = ("--dtf-layers", "--rw-layers", "--bdpt-strategies")
+    i = 0
+    while i < len(argv):
+        tok = argv[i]
+        name, eq, value = tok.partition("=") if tok.startswith("--") else (tok, "", "")
+        i += 1
+        if name in not_here:
+            raise ValueError(f"{name}: not written by a distributed render (render without --dask for it)")
+        if name in own_flags:
+            out[own_flags[name]] = True
+            continue
+        if name in own_values or name in by_flag:
+            o = by_flag.get(name)
+            if o is not None and not o["takes_value"]:
+                out["options"][o["name"]] = True
+                continue
+            if not eq:
+                if i >= len(argv):
+                    raise ValueError(f"{name}: a value is required")
+                value = argv[i]
+                i += 1
+            if name in own_values:
+                out[own_values[name]] = value
+            else:
+                out["options"][o["name"]] = value
+            continue
+        if tok.startswith("-") and tok != "-":
+            raise ValueError(f"unexpected argument '{tok}' ({_CLI_USAGE})")
+        if out["scene"] is not None:
+            raise ValueError(f"unexpected argument '{tok}': the scene is {out['scene']!r} ({_CLI_USAGE})")
+        out["scene"] = tok
+    if out["scheduler"] is None:
+        raise ValueError(f"--dask: the Dask scheduler's address is required ({_CLI_USAGE})")
+    if out["scene"] is None:
+        raise ValueError(f"the scene is required ({_CLI_USAGE})")
+    try:
+        out["chunk_spp"] = None if out["chunk_spp"] is None else int(out["chunk_spp"])
+        out["exposure"] = float(out["exposure"])
+    except ValueError as e:
+        raise ValueError(f"--dask-chunk-spp/--exposure: {e}") from None
+    return out
+
+
+def main(argv: List[str]) -> int:
+    """``kalos render --dask tcp://HOST:8786 SCENE [options]`` (the binary runs ``python -m
+    kalos render ...``, which calls this with the arguments after ``render``): the render
+    ``kalos render SCENE [options]`` would make, on the Dask cluster, written to ``-o``.
+    Errors are one ``kalos: error:`` line and exit status 1 (2 for a bad command line)."""
+    import sys
+
+    try:
+        a = _parse_cli(argv)
+    except ValueError as e:
+        print(f"kalos: error: {e}", file=sys.stderr)
+        return 2
+    from . import SceneError, write
+
+    try:
+        from distributed import Client
+    except ImportError:
+        print("kalos: error: --dask needs Dask in this Python: pip install dask distributed", file=sys.stderr)
+        return 1
+    opts = dict(a["options"])
+    spp = opts.pop("spp", None)
+    quiet = a["quiet"]
+
+    def progress(done: int, total: int) -> None:
+        if not quiet:
+            print(f"kalos: part {done}/{total} done, {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+
+    t0 = time.perf_counter()
+    try:
+        # refuse bad options and outputs before connecting (the CLI's messages)
+        if a["output"].lower().endswith(".kfilm") and (opts.get("method") or "plain") != "plain":
+            raise ValueError("-o/--output: a .kfilm film file holds a plain render's samples; --method dtf writes images only")
+        sc = load(a["scene"])
+        if not quiet:
+            for w in sc.warnings:
+                print(f"kalos: warning: {w}", file=sys.stderr)
+        _job(sc, spp=spp, **opts)
+        with Client(a["scheduler"], timeout="20s") as client:
+            if not quiet:
+                n = sum(client.nthreads().values())
+                print(f"kalos: {a['scene']} on {a['scheduler']}: {len(client.nthreads())} workers, {n} threads",
+                      file=sys.stderr)
+            img = render(sc, spp, client=client, chunk_spp=a["chunk_spp"], progress=progress, **opts)
+        write(a["output"], img, exposure=a["exposure"], aovs=a["aovs"])
+        if a["stats"]:
+            with open(a["stats"], "w") as f:
+                json.dump(img.stats, f, indent=2)
+                f.write("\n")
+    except KeyboardInterrupt:
+        print("kalos: error: interrupted: the distributed render was cancelled, nothing written", file=sys.stderr)
+        return 130
+    except (ValueError, TypeError, SceneError, OSError) as e:
+        msg = " ".join(str(e).split())
+        print(f"kalos: error: {msg}", file=sys.stderr)
+        return 1
+    if not quiet:
+        s = img.stats or {}
+        print(f"kalos: {a['scene']} {img.shape[1]}x{img.shape[0]} {s.get('spp', '?')} spp in "
+              f"{time.perf_counter() - t0:.2f} s on the cluster ({s.get('parts', '?')} parts) -> {a['output']}",
+              file=sys.stderr)
+    return 0

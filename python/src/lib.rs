@@ -9,7 +9,7 @@
 //! next row and the interrupt is raised.
 
 use kalos::film::{film_from_bytes, film_to_bytes, merge_files, read_film, write_film, FilmFile};
-use kalos::image_io::{ExtraLayer, LayerData, RgbImage};
+use kalos::image_io::RgbImage;
 use kalos::progress::Progress;
 use kalos::render::{RenderJob, DEFAULT_SPP};
 use kalos::scene::Scene;
@@ -517,20 +517,16 @@ fn write(
                 .collect())
         })
         .transpose()?;
-    let mut extra = Vec::new();
-    if let Some(v) = &var {
-        extra.push(ExtraLayer {
-            name: "variance",
-            channels: LayerData::Rgb(&v.data),
-        });
-    }
-    if let Some(c) = &cnt {
-        extra.push(ExtraLayer {
-            name: "count",
-            channels: LayerData::Mono(c),
-        });
-    }
-    py.detach(|| kalos::image_io::write_image(&path, &img, exposure, &extra))
+    let aovs = match (&var, &cnt) {
+        (Some(v), Some(c)) => Some((&v.data[..], &c[..])),
+        (None, None) => None,
+        _ => {
+            return Err(PyValueError::new_err(
+                "variance and count: give both (the --aovs layers) or neither",
+            ))
+        }
+    };
+    py.detach(|| kalos::image_io::write_image_aovs(&path, &img, exposure, aovs))
         .map_err(value_error)
 }
 

@@ -109,7 +109,9 @@ def free_port():
         return s.getsockname()[1]
 
 
-def test_scheduler_and_workers_as_separate_processes(reference):
+def test_scheduler_and_workers_as_separate_processes(reference, cli, tmp_path):
+    """The module's render and `kalos render --dask ADDRESS` on a scheduler and two workers
+    started as processes of their own: the one-process image, and the CLI's file."""
     distributed = pytest.importorskip("distributed")
     port = free_port()
     addr = f"tcp://127.0.0.1:{port}"
@@ -127,6 +129,20 @@ def test_scheduler_and_workers_as_separate_processes(reference):
             img = kalos.distributed.render("cornell", spp=SPP, client=client, chunk_spp=16, **OPTS)
             assert img.stats["workers"] == 2
             assert same(img, reference)
+            # the CLI's front end: the same EXR file, byte for byte, as without --dask
+            os.environ["KALOS_PYTHON"] = sys.executable
+            args = ["render", "cornell", "--spp", SPP, "--res", "48x48", "--seed", 3, "--aovs"]
+            r = cli(*args, "--dask", addr, "--dask-chunk-spp", 16, "-o", tmp_path / "d.exr",
+                    "--stats", tmp_path / "d.json")
+            assert "4 parts" in r.stderr and (tmp_path / "d.json").is_file()
+            cli(*args, "-q", "-o", tmp_path / "p.exr")
+            assert (tmp_path / "d.exr").read_bytes() == (tmp_path / "p.exr").read_bytes()
+            # and its refusals are one line
+            from conftest import cli_error
+            assert "give --spp, not --time" in cli_error(cli("render", "cornell", "--time", 1, "--dask", addr,
+                                                             check=False))
+            assert "--dtf-layers" in cli_error(cli("render", "cornell", "--dask", addr, "--dtf-layers",
+                                                   "--method", "dtf", check=False))
         finally:
             client.close()
     finally:

@@ -16,13 +16,18 @@ static HANDLER: OnceLock<()> = OnceLock::new();
 /// Install the Ctrl-C / SIGTERM handler once (the first asks the render to stop; a
 /// second Ctrl-C after that exits at once).
 pub fn install_interrupt_handler() {
+    install_handler("finishing the rows under way, then writing what was rendered");
+}
+
+/// The same handler, saying `what` happens after the first interrupt.
+pub fn install_handler(what: &'static str) {
     HANDLER.get_or_init(|| {
-        let _ = ctrlc::set_handler(|| {
+        let _ = ctrlc::set_handler(move || {
             if STOP.swap(true, Ordering::SeqCst) {
                 eprintln!("\nkalos: interrupted twice, exiting without writing");
                 std::process::exit(130);
             }
-            eprintln!("\nkalos: interrupted: finishing the rows under way, then writing what was rendered");
+            eprintln!("\nkalos: interrupted: {what}");
         });
     });
 }

@@ -1,9 +1,9 @@
 //! `kalos render`: a thin translation of the command line into a `RenderJob`, then the
 //! output: image (or film file), AOV layers, DTF layers and statistics.
 
-use super::progress::{install_interrupt_handler, rate, CliProgress};
+use super::progress::{install_handler, install_interrupt_handler, interrupted, rate, CliProgress};
 use crate::film::{write_film, Film, FilmFile};
-use crate::image_io::{write_image, ExtraLayer, LayerData, RgbImage};
+use crate::image_io::{write_image, write_image_aovs, RgbImage};
 use crate::render::{Method, RenderJob};
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -43,6 +43,15 @@ pub struct RenderArgs {
     /// (`out-s1-t2-unweighted.exr`): which strategy carries which light.
     #[arg(long)]
     pub bdpt_strategies: bool,
+    /// Render on a Dask cluster: the scheduler's address (`tcp://host:8786`). The samples
+    /// are split into tasks, rendered by the workers and merged exactly (the same image as
+    /// without --dask). Runs `python3 -m kalos render ...`: needs the kalos Python module
+    /// with dask and distributed (`KALOS_PYTHON` names another interpreter).
+    #[arg(long, value_name = "ADDRESS")]
+    pub dask: Option<String>,
+    /// With --dask: samples per task (default: two tasks per worker thread).
+    #[arg(long, value_name = "N", requires = "dask", value_parser = clap::value_parser!(u32).range(1..))]
+    pub dask_chunk_spp: Option<u32>,
 }
 
 impl RenderArgs {
@@ -155,6 +164,9 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
             return Err("--bdpt-strategies: needs a plain render to an image with --spp (not --method dtf, --time or a .kfilm output)".into());
         }
     }
+    if let Some(addr) = &a.dask {
+        return run_on_dask(&a, &job, addr);
+    }
     install_interrupt_handler();
     let progress = CliProgress::new(a.quiet);
     let r = crate::render::render(&job, &progress)?;
@@ -213,6 +225,73 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// `kalos render --dask ADDRESS ...`: the same command line, run by the Python module's
+/// Dask front end (`python3 -m kalos render ...`, `python/kalos/distributed.py`), which
+/// splits the samples into tasks and merges their film parts exactly.
+fn run_on_dask(a: &RenderArgs, job: &RenderJob, addr: &str) -> Result<(), String> {
+    if a.dtf_layers || a.rw_layers || a.bdpt_strategies {
+        return Err("--dask: --dtf-layers, --rw-layers and --bdpt-strategies are written by a render in one process only".into());
+    }
+    if job.time.is_some() {
+        return Err(
+            "--dask: a distributed render splits a sample budget: give --spp, not --time".into(),
+        );
+    }
+    if !matches!(job.method, Method::Plain | Method::Dtf) {
+        return Err("--dask: only --method plain and dtf are distributed so far".into());
+    }
+    let python = std::env::var_os("KALOS_PYTHON").unwrap_or_else(|| "python3".into());
+    let shown = Path::new(&python).display().to_string();
+    let check = std::process::Command::new(&python)
+        .args(["-c", "import kalos.distributed"])
+        .output()
+        .map_err(|e| format!("--dask {addr}: cannot run {shown} ({e}): install Python 3 with the kalos module (pip install ./python dask distributed) or set KALOS_PYTHON"))?;
+    if !check.status.success() {
+        let err = String::from_utf8_lossy(&check.stderr);
+        let last = err
+            .lines()
+            .rev()
+            .find(|l| !l.trim().is_empty())
+            .unwrap_or("")
+            .trim();
+        return Err(format!("--dask {addr}: {shown} cannot import the kalos module ({last}): pip install ./python dask distributed, or set KALOS_PYTHON"));
+    }
+    // Ctrl-C reaches the Python process too (one process group) and it cancels the
+    // tasks; a SIGTERM sent to kalos alone ends the Python process after a grace period
+    // (the scheduler then drops the tasks of the lost client).
+    install_handler("cancelling the distributed render");
+    let mut child = std::process::Command::new(&python)
+        .args(["-m", "kalos"])
+        .args(std::env::args_os().skip(1))
+        .spawn()
+        .map_err(|e| format!("--dask {addr}: cannot run {shown}: {e}"))?;
+    let mut stop_seen: Option<std::time::Instant> = None;
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(st)) => break st,
+            Ok(None) => {}
+            Err(e) => return Err(format!("--dask {addr}: {shown}: {e}")),
+        }
+        if interrupted() {
+            let t = *stop_seen.get_or_insert_with(std::time::Instant::now);
+            if t.elapsed().as_secs_f64() > 5.0 {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!(
+                    "--dask {addr}: interrupted: the distributed render was cancelled, nothing written"
+                ));
+            }
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    if status.success() {
+        Ok(())
+    } else {
+        // the Python side printed its one-line error
+        std::process::exit(status.code().unwrap_or(1));
+    }
+}
+
 /// Write the displayed image, with the film's variance and count layers when asked.
 pub fn write_output(
     path: &Path,
@@ -221,37 +300,12 @@ pub fn write_output(
     exposure: f32,
     aovs: bool,
 ) -> Result<(), String> {
-    let var = film.variance_rgb();
-    let cnt = film.counts();
-    // 1 where a channel of the pixel's estimate is negative (the estimate roulette can
-    // make it so; the roulette paper's figure 4, right).
-    let neg: Vec<f32> = if aovs {
-        img.data
-            .iter()
-            .map(|p| if p.iter().any(|&v| v < 0.0) { 1.0 } else { 0.0 })
-            .collect()
+    if aovs {
+        let (var, cnt) = (film.variance_rgb(), film.counts());
+        write_image_aovs(path, img, exposure, Some((&var, &cnt)))
     } else {
-        vec![]
-    };
-    let extra = if aovs {
-        vec![
-            ExtraLayer {
-                name: "variance",
-                channels: LayerData::Rgb(&var),
-            },
-            ExtraLayer {
-                name: "count",
-                channels: LayerData::Mono(&cnt),
-            },
-            ExtraLayer {
-                name: "negative",
-                channels: LayerData::Mono(&neg),
-            },
-        ]
-    } else {
-        vec![]
-    };
-    write_image(path, img, exposure, &extra)
+        write_image_aovs(path, img, exposure, None)
+    }
 }
 
 /// `out.exr` -> `out-NAME.exr` (same folder and extension).

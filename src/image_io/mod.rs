@@ -75,6 +75,41 @@ pub fn format_of(path: &Path) -> Result<Format, String> {
     }
 }
 
+/// Write an image with the layers of `--aovs` when `aovs` gives the per-pixel variance
+/// (RGB) and sample count: `variance`, `count`, and `negative` (1 where a channel of the
+/// estimate is negative: the estimate roulette can make it so, the roulette paper's
+/// figure 4, right). The CLI, `kalos merge` and the Python module all write through it.
+pub fn write_image_aovs(
+    path: &Path,
+    img: &RgbImage,
+    exposure: f32,
+    aovs: Option<(&[[f32; 3]], &[f32])>,
+) -> Result<(), String> {
+    let Some((var, cnt)) = aovs else {
+        return write_image(path, img, exposure, &[]);
+    };
+    let neg: Vec<f32> = img
+        .data
+        .iter()
+        .map(|p| if p.iter().any(|&v| v < 0.0) { 1.0 } else { 0.0 })
+        .collect();
+    let extra = [
+        ExtraLayer {
+            name: "variance",
+            channels: LayerData::Rgb(var),
+        },
+        ExtraLayer {
+            name: "count",
+            channels: LayerData::Mono(cnt),
+        },
+        ExtraLayer {
+            name: "negative",
+            channels: LayerData::Mono(&neg),
+        },
+    ];
+    write_image(path, img, exposure, &extra)
+}
+
 /// Write an image; `exposure` (in stops) applies to PNG only; extra layers go to EXR only.
 pub fn write_image(
     path: &Path,
