@@ -192,7 +192,7 @@ fn mutated_mtl_never_panics() {
     let dir = Path::new("/nonexistent-kalos-dir");
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
     let seed = format!("{MTL}map_Kd -s 1 1 1 -o 0 0 0 t\\x.png\n");
-    assert_eq!(mtl::parse_mtl(&seed, "fuzz.mtl", dir).unwrap().len(), 3);
+    assert_eq!(mtl::parse_mtl(&seed, "fuzz.mtl", dir).unwrap().0.len(), 3);
     for _ in 0..200 {
         let text = mutate(&seed, &mut rng);
         no_panic("MTL", &text, || {

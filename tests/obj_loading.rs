@@ -715,7 +715,7 @@ fn map_kd_file_names_with_spaces_after_options() {
         ),
     ];
     for (line, want) in cases {
-        let m = kalos::scene::mtl::parse_mtl(&format!("newmtl a\n{line}\n"), "x.mtl", dir)
+        let (m, _) = kalos::scene::mtl::parse_mtl(&format!("newmtl a\n{line}\n"), "x.mtl", dir)
             .unwrap_or_else(|e| panic!("{line}: {e}"));
         assert_eq!(m[0].map_kd.as_deref(), Some(Path::new(want)), "{line}");
     }

@@ -5,6 +5,13 @@
 //! renders differently from what the file asks (`illum 99`, glass with `Ni 0`, a
 //! duplicate `newmtl`) become notes on the material, one warning per material; Kd + Ks
 //! above 1 is scaled when the scene is built ([`energy_scale`]).
+//!
+//! Files written by Blender (a first line `# Blender ... MTL File`) and materials with
+//! the PBR extension's `Pr`/`Pm` are not Phong materials: Blender writes its Principled
+//! BSDF as base colour `Kd`, specular level `Ks` (0.5 is a 4% Fresnel reflectance),
+//! roughness as `Ns` and metallic as `illum 3` with `Ka`. They are read as such
+//! ([`principled`]); read as Phong, every Blender material (`Kd 0.8`, `Ks 0.5`) would
+//! reflect 1.3 and, scaled to 1, make a closed room a lossless furnace.
 
 use super::MaterialDesc;
 use std::path::{Path, PathBuf};
@@ -113,10 +120,130 @@ fn map_file_name<'a>(
     Ok(rest)
 }
 
-/// Parse MTL text. `file` names it in messages; `dir` resolves texture paths.
-pub fn parse_mtl(text: &str, file: &str, dir: &Path) -> Result<Vec<MaterialDesc>, String> {
+/// Which of Blender's OBJ exporters wrote a file: the one in C++ (Blender 3.3 on, a
+/// version in its first line) or the older Python add-on; they write roughness as `Ns`
+/// differently.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Writer {
+    /// `# Blender 3.6.0 MTL File: ...`: Ns = 1000 (1 - r)^2, version major.
+    BlenderCpp(u32),
+    /// `# Blender MTL File: ...`: Ns = (30 (1 - r))^2.
+    BlenderPython,
+    Other,
+}
+
+fn writer_of(text: &str) -> Writer {
+    let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
+    let words: Vec<&str> = first.trim_start_matches('#').split_whitespace().collect();
+    match words.as_slice() {
+        ["Blender", "MTL", ..] => Writer::BlenderPython,
+        ["Blender", v, "MTL", ..] => Writer::BlenderCpp(
+            v.split('.')
+                .next()
+                .and_then(|m| m.parse().ok())
+                .unwrap_or(3),
+        ),
+        _ => Writer::Other,
+    }
+}
+
+/// The PBR statements of a material (Blender's and the PBR extension's).
+#[derive(Clone, Copy, Debug, Default)]
+struct Pbr {
+    ka: Option<[f32; 3]>,
+    pr: Option<f32>,
+    pm: Option<f32>,
+}
+
+/// Blender's Principled BSDF from what its exporter wrote, as a kalos surface model:
+/// roughness r (`Pr`, else from `Ns`), GGX alpha = r^2 (Blender's convention); metallic m
+/// (`Pm`, else `Ka` under `illum 3`); a dielectric (m < 0.5) is a diffuse base `Kd` under
+/// a coat whose normal-incidence reflectance is F0 = 0.08 s (Blender 2.8-3.x, s = `Ks`)
+/// or F0(`Ni`) 2 s (Blender 4's "IOR level"), of index eta = (1 + sqrt F0)/(1 - sqrt F0);
+/// a metal (m >= 0.5) a conductor whose F0 is the base colour. `illum 1` (Blender's
+/// specular 0) and glass or mirror models stay as MTL reads them. Returns the model and
+/// a note when the material is only approximated.
+fn principled(
+    m: &MaterialDesc,
+    pbr: &Pbr,
+    writer: Writer,
+) -> Option<(super::SurfaceModel, Option<String>)> {
+    use super::SurfaceModel;
+    if !matches!(m.illum, 2 | 3) {
+        return None;
+    }
+    let r = match (pbr.pr, writer) {
+        (Some(r), _) => r,
+        (None, Writer::BlenderPython) => 1.0 - m.ns.max(0.0).sqrt() / 30.0,
+        (None, _) => 1.0 - (m.ns.max(0.0) / 1000.0).sqrt(),
+    }
+    .clamp(0.0, 1.0);
+    let alpha = r * r;
+    let metallic = match (pbr.pm, pbr.ka) {
+        (Some(v), _) => v,
+        (None, Some(ka)) if m.illum == 3 => (ka[0] + ka[1] + ka[2]) / 3.0,
+        _ => 0.0,
+    }
+    .clamp(0.0, 1.0);
+    let eta_of = |f0: f32| {
+        let s = f0.clamp(0.0, 0.998).sqrt();
+        (1.0 + s) / (1.0 - s)
+    };
+    let mut note = None;
+    if metallic > 0.0 && metallic < 1.0 {
+        note = Some(format!(
+            "metallic {metallic} (a blend of metal and dielectric) rendered as {}",
+            if metallic >= 0.5 {
+                "a metal"
+            } else {
+                "a dielectric"
+            }
+        ));
+    }
+    if metallic >= 0.5 {
+        if m.map_kd.is_some() {
+            note = Some("a metal's colour from map_Kd: rendered with Kd, untextured".into());
+        }
+        return Some((
+            SurfaceModel::Conductor {
+                eta: m.kd.map(eta_of),
+                k: [0.0; 3],
+                specular: [1.0; 3],
+                alpha,
+            },
+            note,
+        ));
+    }
+    let level = (m.ks[0] + m.ks[1] + m.ks[2]) / 3.0;
+    let f0 = match writer {
+        Writer::BlenderCpp(v) if v >= 4 && m.ni > 1.0 => {
+            ((m.ni - 1.0) / (m.ni + 1.0)).powi(2) * 2.0 * level
+        }
+        Writer::Other if m.ni > 1.0 => ((m.ni - 1.0) / (m.ni + 1.0)).powi(2),
+        _ => 0.08 * level,
+    };
+    Some((
+        SurfaceModel::Plastic {
+            eta: eta_of(f0),
+            specular: [1.0; 3],
+            alpha,
+            nonlinear: false,
+        },
+        note,
+    ))
+}
+
+/// Parse MTL text. `file` names it in messages; `dir` resolves texture paths. Also
+/// returns a note for the file when its materials were read as Blender's (one warning).
+pub fn parse_mtl(
+    text: &str,
+    file: &str,
+    dir: &Path,
+) -> Result<(Vec<MaterialDesc>, Option<String>), String> {
     let text = crate::input::clean_text(text);
+    let writer = writer_of(&text);
     let mut mats: Vec<MaterialDesc> = Vec::new();
+    let mut pbr: Vec<Pbr> = Vec::new();
     // (line of newmtl, line of Ni) of the current material
     let mut lines: Vec<(usize, Option<usize>)> = Vec::new();
     for (i, raw) in text.lines().enumerate() {
@@ -140,11 +267,12 @@ pub fn parse_mtl(text: &str, file: &str, dir: &Path) -> Result<Vec<MaterialDesc>
                 ));
             }
             mats.push(m);
+            pbr.push(Pbr::default());
             lines.push((line_no, None));
             continue;
         }
         let known = [
-            "Kd", "Ks", "Ke", "Ns", "Ni", "illum", "map_Kd", "Ka", "d", "Tr", "Tf",
+            "Kd", "Ks", "Ke", "Ns", "Ni", "illum", "map_Kd", "Ka", "d", "Tr", "Tf", "Pr", "Pm",
         ];
         if !known.contains(&key) {
             continue; // other statements (maps we do not use, PBR extensions) are ignored
@@ -157,6 +285,17 @@ pub fn parse_mtl(text: &str, file: &str, dir: &Path) -> Result<Vec<MaterialDesc>
             "Kd" => m.kd = to3(&v3(3)?),
             "Ks" => m.ks = to3(&v3(3)?),
             "Ke" => m.ke = to3(&v3(3)?),
+            "Ka" => {
+                if let Some(p) = pbr.last_mut() {
+                    p.ka = Some(to3(&v3(3)?));
+                }
+            }
+            "Pr" | "Pm" => {
+                let v = v3(1)?[0];
+                if let Some(p) = pbr.last_mut() {
+                    *(if key == "Pr" { &mut p.pr } else { &mut p.pm }) = Some(v);
+                }
+            }
             "Ns" => m.ns = v3(1)?[0],
             "Ni" => {
                 m.ni = v3(1)?[0];
@@ -193,7 +332,29 @@ pub fn parse_mtl(text: &str, file: &str, dir: &Path) -> Result<Vec<MaterialDesc>
             ));
         }
     }
-    Ok(mats)
+    let blender = writer != Writer::Other;
+    let mut read_as_pbr = 0;
+    for (m, p) in mats.iter_mut().zip(&pbr) {
+        if !(blender || p.pr.is_some() || p.pm.is_some()) {
+            continue;
+        }
+        if let Some((model, note)) = principled(m, p, writer) {
+            m.model = Some(model);
+            m.notes.extend(note);
+            read_as_pbr += 1;
+        }
+    }
+    let note = (read_as_pbr > 0).then(|| {
+        format!(
+            "{file}: {read_as_pbr} material{} {} read as a physically based surface ({}base colour Kd, roughness from {}, specular level Ks, metallic from {}), not as Phong Kd + Ks",
+            if read_as_pbr == 1 { "" } else { "s" },
+            if read_as_pbr == 1 { "is" } else { "are" },
+            if blender { "Blender's Principled BSDF export: " } else { "the PBR extension: " },
+            if blender { "Ns or Pr" } else { "Pr" },
+            if blender { "illum 3 + Ka or Pm" } else { "Pm" },
+        )
+    });
+    Ok((mats, note))
 }
 
 /// The factor that brings the albedo of an MTL material to at most 1 on every band
@@ -239,7 +400,8 @@ mod tests {
     #[test]
     fn parses_materials_and_reports_lines() {
         let text = "# c\nnewmtl a\nKd 0.5\nKs 0.1 0.2 0.3\nNs 15\nillum 5\nmap_Kd -s 1 1 1 tex\\wood.png\nnewmtl b\nKe 1 2 3\n";
-        let m = parse_mtl(text, "x.mtl", Path::new("/d")).unwrap();
+        let (m, note) = parse_mtl(text, "x.mtl", Path::new("/d")).unwrap();
+        assert!(note.is_none() && m.iter().all(|m| m.model.is_none()));
         assert_eq!(m.len(), 2);
         assert_eq!(m[0].kd, [0.5; 3]);
         assert_eq!(m[0].ks, [0.1, 0.2, 0.3]);
@@ -252,5 +414,67 @@ mod tests {
         assert!(e.starts_with("x.mtl:3: Kd: negative"), "{e}");
         let e = parse_mtl("Kd 1 1 1\n", "x.mtl", Path::new(".")).unwrap_err();
         assert!(e.contains("before any newmtl"), "{e}");
+    }
+
+    /// Blender's exporters' defaults (base 0.8, specular 0.5, roughness 0.5) as they write
+    /// them, read back as the Principled BSDF they describe.
+    #[test]
+    fn blender_materials_are_read_as_principled() {
+        use crate::scene::SurfaceModel;
+        let cpp = "# Blender 3.6.5 MTL File: 'room.blend'\n# www.blender.org\n\nnewmtl Wall\nNs 250.000000\nKa 1.000000 1.000000 1.000000\nKd 0.800000 0.800000 0.800000\nKs 0.500000 0.500000 0.500000\nKe 0.0 0.0 0.0\nNi 1.450000\nd 1.000000\nillum 2\n\nnewmtl Gold\nNs 810.0\nKa 1.0 1.0 1.0\nKd 1.0 0.766 0.336\nKs 0.5 0.5 0.5\nNi 1.45\nillum 3\n\nnewmtl Matte\nNs 0\nKd 0.5 0.5 0.5\nKs 0 0 0\nillum 1\n";
+        let (m, note) = parse_mtl(cpp, "room.mtl", Path::new(".")).unwrap();
+        let note = note.expect("a note for the file");
+        assert!(
+            note.starts_with("room.mtl: 2 materials are read as") && note.contains("Blender"),
+            "{note}"
+        );
+        match m[0].model {
+            Some(SurfaceModel::Plastic { eta, alpha, .. }) => {
+                // F0 = 0.08 x 0.5 = 0.04: eta 1.5; roughness 1 - sqrt(250/1000) = 0.5
+                assert!((eta - 1.5).abs() < 1e-4, "{eta}");
+                assert!((alpha - 0.25).abs() < 1e-5, "{alpha}");
+            }
+            ref o => panic!("{o:?}"),
+        }
+        match m[1].model {
+            Some(SurfaceModel::Conductor { eta, k, alpha, .. }) => {
+                // F0 of a k = 0 conductor of index eta is ((eta - 1)/(eta + 1))^2 = Kd
+                for c in 0..3 {
+                    let f0 = ((eta[c] - 1.0) / (eta[c] + 1.0)).powi(2);
+                    assert!((f0 - m[1].kd[c]).abs() < 2e-3, "{c}: {f0}");
+                }
+                assert_eq!(k, [0.0; 3]);
+                assert!((alpha - 0.01).abs() < 1e-4, "{alpha}");
+            }
+            ref o => panic!("{o:?}"),
+        }
+        assert!(
+            m[2].model.is_none(),
+            "illum 1 (specular 0) stays Lambertian"
+        );
+        // the Python add-on's Ns = (30 (1 - r))^2; Blender 4's F0 = F0(Ni) x 2 x level
+        let py = "# Blender MTL File: 'None'\n# Material Count: 1\n\nnewmtl M\nNs 225\nKd 0.8 0.8 0.8\nKs 0.5 0.5 0.5\nNi 1.5\nillum 2\n";
+        let (m, _) = parse_mtl(py, "a.mtl", Path::new(".")).unwrap();
+        assert!(
+            matches!(m[0].model, Some(SurfaceModel::Plastic { alpha, .. }) if (alpha - 0.25).abs() < 1e-5)
+        );
+        let v4 = py
+            .replace("# Blender MTL File", "# Blender 4.2.1 MTL File")
+            .replace("Ns 225", "Ns 250");
+        let (m, _) = parse_mtl(&v4, "a.mtl", Path::new(".")).unwrap();
+        assert!(
+            matches!(m[0].model, Some(SurfaceModel::Plastic { eta, .. }) if (eta - 1.5).abs() < 1e-4)
+        );
+        // the PBR extension in a file of another writer
+        let (m, note) = parse_mtl(
+            "newmtl a\nKd 0.5 0.5 0.5\nPr 0.3\nPm 1\n",
+            "b.mtl",
+            Path::new("."),
+        )
+        .unwrap();
+        assert!(
+            matches!(m[0].model, Some(SurfaceModel::Conductor { alpha, .. }) if (alpha - 0.09).abs() < 1e-5)
+        );
+        assert!(note.unwrap().contains("PBR extension"));
     }
 }

@@ -251,7 +251,9 @@ pub fn load_obj_text(
                 (t.to_string(), lib.to_string(), Path::new(".").to_path_buf())
             }
         };
-        mats.extend(parse_mtl(&mtl_text, &mtl_name, &dir)?);
+        let (read, note) = parse_mtl(&mtl_text, &mtl_name, &dir)?;
+        mats.extend(read);
+        desc.warnings.extend(note);
     }
     let mut unknown: Vec<&str> = Vec::new();
     for (line_no, name) in &checked.usemtls {
