@@ -439,9 +439,9 @@ mod tests {
         match m[1].model {
             Some(SurfaceModel::Conductor { eta, k, alpha, .. }) => {
                 // F0 of a k = 0 conductor of index eta is ((eta - 1)/(eta + 1))^2 = Kd
-                for c in 0..3 {
-                    let f0 = ((eta[c] - 1.0) / (eta[c] + 1.0)).powi(2);
-                    assert!((f0 - m[1].kd[c]).abs() < 2e-3, "{c}: {f0}");
+                for (e, kd) in eta.iter().zip(m[1].kd) {
+                    let f0 = ((e - 1.0) / (e + 1.0)).powi(2);
+                    assert!((f0 - kd).abs() < 2e-3, "{kd}: {f0}");
                 }
                 assert_eq!(k, [0.0; 3]);
                 assert!((alpha - 0.01).abs() < 1e-4, "{alpha}");
