@@ -825,7 +825,13 @@ fn radiosity_too_fine_a_mesh_and_no_diffuse_surface() {
         );
     }
     let (code, _, err) = kalos(&["radiosity", &obj, "-o", ply]);
-    assert_one_line_error("kalos radiosity nd.obj", code, &err, 1, &["no diffuse surface"]);
+    assert_one_line_error(
+        "kalos radiosity nd.obj",
+        code,
+        &err,
+        1,
+        &["no diffuse surface"],
+    );
     assert!(!std::path::Path::new(ply).exists());
 }
 
