@@ -804,6 +804,76 @@ fn rw_bad_d_and_filter_energy_without_layers() {
     assert!(out.is_file());
 }
 
+/// The radiosity preprocess (`--gather radiosity`, `--method rw`, `kalos radiosity`): a
+/// mesh too fine for memory and a scene with no diffuse surface give one-line errors
+/// naming the option or the scene, before anything is allocated or rendered.
+#[test]
+fn radiosity_too_fine_a_mesh_and_no_diffuse_surface() {
+    let d = temp_dir("radiosity");
+    let ply = d.join("r.ply");
+    let ply = ply.to_str().unwrap();
+    for area in ["1e-9", "1e-12"] {
+        let (code, err) = render(
+            &d,
+            "cornell",
+            &["--gather", "radiosity", "--radiosity-max-area", area],
+        );
+        assert_one_line_error(
+            &format!("--radiosity-max-area {area}"),
+            code,
+            &err,
+            1,
+            &["--radiosity-max-area", "elements", "GiB"],
+        );
+    }
+    // more elements allowed than memory holds: the byte limit still refuses it
+    let (code, _, err) = kalos(&[
+        "radiosity",
+        "cornell",
+        "-o",
+        ply,
+        "--radiosity-max-area",
+        "1e-7",
+        "--radiosity-max-elements",
+        "100000000000",
+    ]);
+    assert_one_line_error("radiosity 1e-7", code, &err, 1, &["GiB"]);
+    // a mirror and an emitter: nothing for the solver to solve
+    write(
+        &d,
+        "nd.mtl",
+        "newmtl m\nKd 0 0 0\nKs 1 1 1\nillum 3\nnewmtl l\nKd 0 0 0\nKe 5 5 5\n",
+    );
+    let obj = write(
+        &d,
+        "nd.obj",
+        "mtllib nd.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nusemtl m\nf 1 2 3\nusemtl l\nf 4 6 5\n",
+    );
+    for extra in [
+        vec!["--gather", "radiosity"],
+        vec!["--integrator", "radiosity"],
+        vec!["--method", "rw", "--gather", "radiosity"],
+    ] {
+        let (code, err) = render(&d, &obj, &extra);
+        assert_one_line_error(
+            &format!("no diffuse surface, {extra:?}"),
+            code,
+            &err,
+            1,
+            &["nd", "no diffuse surface"],
+        );
+    }
+    let (code, _, err) = kalos(&["radiosity", &obj, "-o", ply]);
+    assert_one_line_error(
+        "kalos radiosity nd.obj",
+        code,
+        &err,
+        1,
+        &["no diffuse surface"],
+    );
+    assert!(!std::path::Path::new(ply).exists());
+}
+
 #[test]
 fn bad_mitsuba_xml_and_ply_give_one_line_errors() {
     let d = temp_dir("xml");

@@ -109,6 +109,7 @@ def render(
     rw_no_filter: Optional[bool] = ...,
     rw_filter_emitters: Optional[bool] = ...,
     rw_pixel_test: Optional[bool] = ...,
+    rw_target: Optional[Literal['linear', 'display']] = ...,
     filter: Optional[Literal['energy']] = ...,
 ) -> RenderResult: ...
 def job(
@@ -163,6 +164,7 @@ def job(
     rw_no_filter: Optional[bool] = ...,
     rw_filter_emitters: Optional[bool] = ...,
     rw_pixel_test: Optional[bool] = ...,
+    rw_target: Optional[Literal['linear', 'display']] = ...,
     filter: Optional[Literal['energy']] = ...,
 ) -> Dict[str, Any]: ...
 def merge(parts: Iterable[Union[Film, bytes, str, os.PathLike[str]]]) -> Film: ...

@@ -508,7 +508,9 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
                 let r = render_scene(&scene, &args.job(), &Silent)?;
                 let metrics = Metrics::compute(&r.image, &reference)
                     .map_err(|e| format!("{fname}: config {}: against the reference: {e}", c.name))?
-                    .with_seconds(r.stats.seconds);
+                    // the estimator's preprocess (a radiosity solution, L~'s photon walk)
+                    // is part of the run's cost, as --time counts it
+                    .with_seconds(r.stats.seconds + r.stats.prepare_seconds);
                 let row = ResultRow {
                     config: c.name.clone(),
                     budget: b,
