@@ -234,6 +234,8 @@ pub struct RenderStats {
     pub seed: u64,
     pub method: Method,
     pub interrupted: bool,
+    /// Instruction set of the BVH traversal (`accel::Isa`: sse2, avx2).
+    pub simd: &'static str,
     pub mean_rgb: [f64; 3],
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dtf: Option<DtfStats>,
@@ -509,6 +511,7 @@ pub fn render_scene(
         seed: job.seed,
         method: job.method,
         interrupted,
+        simd: scene.bvh.isa().name(),
         mean_rgb: image.mean(),
         dtf: dtf_stats,
         rw: rw_run.as_ref().map(|r| r.stats.clone()),

@@ -91,9 +91,25 @@ fn random_ray(rng: &mut Rng) -> (Ray, f32) {
     (Ray::new(o, d), t_max)
 }
 
+/// Checks every instruction set this CPU has against the brute force; returns
+/// the hits and ties of the last.
 fn check_against_brute(tris: &[[Vec3; 3]], rays: usize, seed: u64) -> (usize, usize) {
-    let bvh = Bvh::build(tris);
+    let mut bvh = Bvh::build(tris);
     check_structure(&bvh, tris);
+    let mut out = (0, 0);
+    for isa in Isa::available() {
+        assert!(bvh.set_isa(isa));
+        out = check_isa_against_brute(&bvh, tris, rays, seed);
+    }
+    out
+}
+
+fn check_isa_against_brute(
+    bvh: &Bvh,
+    tris: &[[Vec3; 3]],
+    rays: usize,
+    seed: u64,
+) -> (usize, usize) {
     let mut rng = Rng::new(seed);
     let mut hits = 0;
     let mut ties = 0;
@@ -231,6 +247,48 @@ fn matches_brute_force_large_parallel_build() {
     let mut rng = Rng::new(6);
     let tris = soup(&mut rng, 40_000, true);
     check_against_brute(&tris, 500, 66);
+}
+
+/// Every instruction set returns the same hits, bit for bit, as the baseline
+/// (on a soup with degenerates and on a large parallel-built one, with the
+/// axis-aligned and signed-zero directions of `random_ray`).
+#[test]
+fn instruction_sets_agree_bit_for_bit() {
+    let isas = Isa::available();
+    assert!(isas.contains(&Isa::Base) && Isa::chosen().is_available());
+    #[cfg(target_arch = "x86_64")]
+    assert_eq!(
+        isas.contains(&Isa::Avx2),
+        is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
+    );
+    let mut rng = Rng::new(11);
+    for n in [300, 40_000] {
+        let tris = soup(&mut rng, n, true);
+        let mut bvh = Bvh::build(&tris);
+        let rays: Vec<(Ray, f32)> = (0..20_000).map(|_| random_ray(&mut rng)).collect();
+        let run = |bvh: &Bvh| {
+            rays.iter()
+                .map(|(r, t)| {
+                    let h = bvh.intersect(r, *t);
+                    (
+                        h.map(|h| (h.t.to_bits(), h.prim, h.b1.to_bits(), h.b2.to_bits())),
+                        bvh.occluded(r, *t),
+                    )
+                })
+                .collect::<Vec<_>>()
+        };
+        assert!(bvh.set_isa(Isa::Base));
+        let base = run(&bvh);
+        assert!(base.iter().filter(|h| h.0.is_some()).count() > 1000);
+        for &isa in &isas[1..] {
+            assert!(bvh.set_isa(isa));
+            assert!(
+                run(&bvh) == base,
+                "{} differs from the baseline",
+                isa.name()
+            );
+        }
+    }
 }
 
 #[test]

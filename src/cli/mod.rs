@@ -173,10 +173,11 @@ pub fn run(cli: Cli) -> Result<(), String> {
                 }
                 println!("load         {:.3} s", i.load_seconds);
                 println!(
-                    "bvh          {:.3} s, {} nodes, {:.1} MiB",
+                    "bvh          {:.3} s, {} nodes, {:.1} MiB, traversal {}",
                     i.bvh_seconds,
                     i.bvh_nodes,
-                    i.bvh_bytes as f64 / 1048576.0
+                    i.bvh_bytes as f64 / 1048576.0,
+                    s.bvh.isa().name()
                 );
                 let e = &crate::integrator::RadianceEstimate::of_scene(&s);
                 let l = e.l_tilde::<3>();
