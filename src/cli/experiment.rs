@@ -550,7 +550,7 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
     for r in &rows {
         csv += &format!(
             "{},{},{},{},{:.4},{},{},{:.6e},{:.6e},{:.6e},{},{:.6},{:.6},{:.6e}\n",
-            r.config,
+            csv_field(&r.config),
             r.budget,
             r.budget_kind,
             r.seed,
@@ -654,11 +654,28 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
     Ok(())
 }
 
+/// A CSV field: quoted as RFC 4180 has it when it holds a comma, a quote or a line break
+/// (a config named `path, 1 thread`), so the table keeps its columns.
+fn csv_field(v: &str) -> String {
+    if v.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", v.replace('"', "\"\""))
+    } else {
+        v.to_string()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     /// The stricter validation must still accept every experiment the project ships.
+    #[test]
+    fn csv_fields_with_commas_and_quotes_are_quoted() {
+        assert_eq!(csv_field("path"), "path");
+        assert_eq!(csv_field("path, 1 thread"), "\"path, 1 thread\"");
+        assert_eq!(csv_field("rw \"paper\""), "\"rw \"\"paper\"\"\"");
+    }
+
     #[test]
     fn the_projects_experiment_files_pass_validation() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/results");
