@@ -116,6 +116,20 @@ CASES = {
     'roughconductor (Au, a 0.2), envmap': (
         f'{{ type = "roughconductor", eta = {AU_ETA}, k = {AU_K}, alpha = 0.2 }}',
         {'type': 'roughconductor', 'distribution': 'ggx', 'alpha': 0.2, 'eta': rgb(AU_ETA), 'k': rgb(AU_K)}, 'map'),
+    # Beckmann: Mitsuba's default distribution (its dicts name none)
+    'roughconductor Beckmann (Au, a 0.2)': (
+        f'{{ type = "roughconductor", eta = {AU_ETA}, k = {AU_K}, alpha = 0.2, distribution = "beckmann" }}',
+        {'type': 'roughconductor', 'alpha': 0.2, 'eta': rgb(AU_ETA), 'k': rgb(AU_K)}, None),
+    'roughconductor Beckmann (Au, a 0.5), envmap': (
+        f'{{ type = "roughconductor", eta = {AU_ETA}, k = {AU_K}, alpha = 0.5, distribution = "beckmann" }}',
+        {'type': 'roughconductor', 'alpha': 0.5, 'eta': rgb(AU_ETA), 'k': rgb(AU_K)}, 'map'),
+    'roughplastic Beckmann (a 0.2)': (
+        '{ type = "roughplastic", eta = 1.49, alpha = 0.2, distribution = "beckmann" }',
+        {'type': 'roughplastic', 'alpha': 0.2, 'int_ior': 1.49, 'ext_ior': 1.0,
+         'diffuse_reflectance': rgb(KD)}, None),
+    'roughdielectric Beckmann (a 0.2)': (
+        '{ type = "roughdielectric", eta = 1.5, alpha = 0.2, distribution = "beckmann" }',
+        {'type': 'roughdielectric', 'alpha': 0.2, 'int_ior': 1.5, 'ext_ior': 1.0}, None),
 }
 ENV_ROT = (20.0, 60.0)   # degrees about x, then about y
 

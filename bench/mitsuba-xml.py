@@ -54,12 +54,12 @@ def mitsuba_render(scene_file, spp, seed):
     return np.array(img)[:, :, :3].astype(np.float64)
 
 
-def kalos_render(kalos, scene_file, spp, seed, res):
+def kalos_render(kalos, scene_file, spp, seed, res, extra=()):
     fd, out = tempfile.mkstemp(suffix=".exr")
     os.close(fd)
     subprocess.run(
         [kalos, "render", scene_file, "--spp", str(spp), "--seed", str(seed),
-         "--res", f"{res}x{res}", "--quiet", "-o", out],
+         "--res", f"{res}x{res}", "--quiet", "-o", out, *extra],
         check=True, stderr=subprocess.DEVNULL)
     img = np.array(mi.Bitmap(out))[:, :, :3].astype(np.float64)
     os.remove(out)
@@ -80,6 +80,8 @@ def main():
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--kalos", default="target/release/kalos")
     ap.add_argument("--png-dir", default="docs/results/mitsuba-xml")
+    ap.add_argument("--kalos-args", default="",
+                    help="more kalos render options, e.g. \"--rr-min-depth 5\"")
     args = ap.parse_args()
     mi.set_variant(args.variant)
     os.makedirs(args.png_dir, exist_ok=True)
@@ -97,7 +99,7 @@ def main():
             last_k = None
             for spp in args.spp:
                 m = mitsuba_render(tmp, spp, 7)
-                k = kalos_render(args.kalos, tmp, spp, 7, args.res)
+                k = kalos_render(args.kalos, tmp, spp, 7, args.res, args.kalos_args.split())
                 r = {
                     "spp": spp,
                     "kalos_mean_ratio": k.mean() / ref_mean,

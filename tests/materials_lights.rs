@@ -8,6 +8,7 @@
 mod common;
 use common::*;
 use kalos::integrator::{BsdfSelect, Integrator, IntegratorKind, RrMode};
+use kalos::material::Distribution;
 use kalos::math::Vec3;
 use kalos::pipeline::Silent;
 use kalos::scene::{
@@ -79,6 +80,7 @@ fn lossless_interfaces_under_a_white_sky_are_white() {
         k: [1.0; 3],
         specular: [1.0; 3],
         alpha: 0.0,
+        distribution: Distribution::Ggx,
     };
     for (name, m) in [
         (
@@ -86,6 +88,7 @@ fn lossless_interfaces_under_a_white_sky_are_white() {
             SurfaceModel::Dielectric {
                 eta: 1.5,
                 alpha: 0.0,
+                distribution: Distribution::Ggx,
             },
         ),
         ("thindielectric", SurfaceModel::ThinDielectric { eta: 1.5 }),
@@ -121,6 +124,7 @@ fn white_plastic_and_rough_interfaces_under_a_white_sky() {
                 eta: 1.5,
                 specular: [1.0; 3],
                 alpha: 0.0,
+                distribution: Distribution::Ggx,
                 nonlinear: false,
             },
             0.99,
@@ -136,6 +140,7 @@ fn white_plastic_and_rough_interfaces_under_a_white_sky() {
                 eta: 1.5,
                 specular: [1.0; 3],
                 alpha: 0.3,
+                distribution: Distribution::Ggx,
                 nonlinear: false,
             },
             0.6,
@@ -147,8 +152,32 @@ fn white_plastic_and_rough_interfaces_under_a_white_sky() {
             SurfaceModel::Dielectric {
                 eta: 1.5,
                 alpha: 0.3,
+                distribution: Distribution::Ggx,
             },
             0.65,
+            1.005,
+        ),
+        // Beckmann, Mitsuba's default distribution: the same bounds
+        (
+            "roughdielectric (Beckmann)",
+            SurfaceModel::Dielectric {
+                eta: 1.5,
+                alpha: 0.3,
+                distribution: Distribution::Beckmann,
+            },
+            0.65,
+            1.005,
+        ),
+        (
+            "roughconductor (perfect, Beckmann)",
+            SurfaceModel::Conductor {
+                eta: [0.0; 3],
+                k: [1.0; 3],
+                specular: [1.0; 3],
+                alpha: 0.3,
+                distribution: Distribution::Beckmann,
+            },
+            0.8,
             1.005,
         ),
         (
@@ -158,6 +187,7 @@ fn white_plastic_and_rough_interfaces_under_a_white_sky() {
                 k: [1.0; 3],
                 specular: [1.0; 3],
                 alpha: 0.3,
+                distribution: Distribution::Ggx,
             },
             0.8,
             1.005,
@@ -187,6 +217,7 @@ fn lobe_selection_methods_agree_on_rough_plastic_and_conductor() {
             eta: 1.5,
             specular: [1.0; 3],
             alpha: 0.2,
+            distribution: Distribution::Ggx,
             nonlinear: false,
         },
         SurfaceModel::Conductor {
@@ -194,8 +225,27 @@ fn lobe_selection_methods_agree_on_rough_plastic_and_conductor() {
             k: [3.9, 2.4, 2.1],
             specular: [1.0; 3],
             alpha: 0.3,
+            distribution: Distribution::Ggx,
+        },
+        SurfaceModel::Plastic {
+            eta: 1.5,
+            specular: [1.0; 3],
+            alpha: 0.2,
+            distribution: Distribution::Beckmann,
+            nonlinear: false,
         },
     ] {
+        // Method 2 (static) divides the whole BRDF by the density of the lobe it sampled;
+        // a Beckmann coat's density falls as exp(-tan^2 / alpha^2) under a base that does
+        // not, so its weights have no finite variance and a 256-spp mean is no test (it
+        // came out 2.9% low): methods 1 and 3 only there.
+        let beckmann = matches!(
+            m,
+            SurfaceModel::Plastic {
+                distribution: Distribution::Beckmann,
+                ..
+            }
+        );
         let mut mat = model(m, 0.7);
         mat.kd = [0.7, 0.4, 0.2];
         let scene = sphere_scene(mat);
@@ -204,6 +254,9 @@ fn lobe_selection_methods_agree_on_rough_plastic_and_conductor() {
         let base = render_spp(&scene, &set, 256);
         let (m0, se0) = mean_and_se(&base);
         for select in [BsdfSelect::Decompose, BsdfSelect::Static, BsdfSelect::Mis] {
+            if beckmann && select == BsdfSelect::Static {
+                continue;
+            }
             for rr in [RrMode::Classic, RrMode::Spectral] {
                 set.integrator.roulette.select = select;
                 set.integrator.roulette.mode = rr;

@@ -6,6 +6,7 @@
 mod common;
 use common::*;
 use kalos::image_io::{read_image, RgbImage};
+use kalos::material::Distribution;
 use kalos::scene::{self, Scene, SurfaceModel};
 use std::path::{Path, PathBuf};
 
@@ -90,7 +91,6 @@ fn includes_defaults_ply_and_obj_shapes() {
   <bsdf type="roughplastic" id="plastic">
     <rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/>
     <float name="alpha" value="$rough"/>
-    <string name="distribution" value="ggx"/>
   </bsdf>
 </scene>"#,
     )
@@ -131,6 +131,8 @@ fn includes_defaults_ply_and_obj_shapes() {
             eta: 1.49 / 1.000277,
             specular: [1.0; 3],
             alpha: 0.3,
+            // no distribution given: Mitsuba's default
+            distribution: Distribution::Beckmann,
             nonlinear: false
         })
     );

@@ -3,14 +3,14 @@
 //! channel, times a `specular` reflectance.
 //!
 //! Smooth (alpha = 0): a Dirac mirror lobe of weight specular F(cos theta_o).
-//! Rough: the microfacet BRDF of Walter et al. (2007) with GGX,
+//! Rough: the microfacet BRDF of Walter et al. (2007) with GGX or Beckmann's D,
 //!   f(wo, wi) = specular F(wo.h) D(h) G1(wo, h) G1(wi, h) / (4 cos theta_o cos theta_i),
 //!   h = (wo + wi) / |wo + wi|,
 //! sampled by drawing a visible normal m from D_wo and reflecting wo about it; then
 //!   p(wi) = D_wo(h) / (4 wo.h) = D(h) G1(wo, h) / (4 cos theta_o),
 //!   f cos theta_i / p = specular F(wo.h) G1(wi, h).
 
-use super::microfacet::{reflect, Ggx};
+use super::microfacet::{reflect, Distribution, Microfacet};
 use super::BsdfSample;
 use crate::spectrum::Spectrum;
 use glam::{Vec2, Vec3};
@@ -22,8 +22,9 @@ pub struct Conductor {
     /// Imaginary part (absorption), per RGB channel.
     pub k: [f32; 3],
     pub specular: [f32; 3],
-    /// GGX roughness; 0: the smooth conductor.
+    /// Microfacet roughness; 0: the smooth conductor.
     pub alpha: f32,
+    pub dist: Distribution,
 }
 
 /// Unpolarised Fresnel reflectance of a conductor of index eta + i k at incidence cosine
@@ -61,8 +62,8 @@ impl Conductor {
     }
 
     #[inline]
-    fn ggx(&self) -> Ggx {
-        Ggx::new(self.alpha)
+    fn mf(&self) -> Microfacet {
+        Microfacet::new(self.dist, self.alpha)
     }
 
     /// specular F(cos) per RGB channel.
@@ -78,7 +79,7 @@ impl Conductor {
             return Spectrum::ZERO;
         }
         let h = (wo + wi).normalize();
-        let g = self.ggx();
+        let g = self.mf();
         let dg = g.d(h) * g.g(wo, wi, h);
         if dg <= 0.0 {
             return Spectrum::ZERO;
@@ -92,7 +93,7 @@ impl Conductor {
             return 0.0;
         }
         let h = (wo + wi).normalize();
-        let g = self.ggx();
+        let g = self.mf();
         g.d(h) * g.g1(wo, h) / (4.0 * wo.z)
     }
 
@@ -101,7 +102,7 @@ impl Conductor {
         if self.is_smooth() || wo.z <= 0.0 {
             return None;
         }
-        let m = self.ggx().sample_visible(wo, u);
+        let m = self.mf().sample_visible(wo, u);
         let wi = reflect(wo, m);
         (wi.z > 0.0).then_some(wi)
     }
@@ -119,7 +120,7 @@ impl Conductor {
                 delta: true,
             });
         }
-        let g = self.ggx();
+        let g = self.mf();
         let m = g.sample_visible(wo, u);
         let wi = reflect(wo, m);
         if wi.z <= 0.0 {

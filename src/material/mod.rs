@@ -30,6 +30,7 @@ pub use albedo::AlbedoTable;
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use lambert::Lambert;
+pub use microfacet::Distribution;
 pub use mirror::Mirror;
 pub use phong::Phong;
 pub use plastic::Plastic;

@@ -2,7 +2,7 @@
 //! reflectance kd under a dielectric coat of relative index eta, reflection only.
 //!
 //! The coat reflects specular R(wo, wi): for the smooth coat a Dirac mirror lobe of weight
-//! specular F(cos theta_o), for the rough coat the GGX microfacet BRDF
+//! specular F(cos theta_o), for the rough coat the microfacet BRDF (GGX or Beckmann's D and G1)
 //!   f_c(wo, wi) = specular F(wo.h) D(h) G1(wo, h) G1(wi, h) / (4 cos theta_o cos theta_i).
 //! Light crosses the coat into the base with probability t(cos theta_i), is reflected
 //! diffusely, and leaves with t(cos theta_o); in between it bounces under the coat, which
@@ -25,7 +25,7 @@
 //! else the base (cosine-weighted).
 
 use super::dielectric::fresnel_dielectric;
-use super::microfacet::{reflect, Ggx};
+use super::microfacet::{reflect, Distribution, Microfacet};
 use super::BsdfSample;
 use crate::sampling::{pdf_cosine_hemisphere, square_to_cosine_hemisphere};
 use crate::spectrum::Spectrum;
@@ -37,11 +37,12 @@ use std::sync::{Mutex, OnceLock};
 /// Cosines at which the rough coat is tabulated (Mitsuba's MI_ROUGH_TRANSMITTANCE_RES).
 pub const COAT_RES: usize = 64;
 
-/// What the coat does, for one (eta, alpha): shared by every material that uses it.
+/// What the coat does, for one (eta, alpha, distribution): shared by every material that uses it.
 #[derive(Debug, PartialEq)]
 pub struct CoatTable {
     pub eta: f32,
     pub alpha: f32,
+    pub dist: Distribution,
     /// t(mu) on mu = i / (COAT_RES - 1) (rough coat; unused for the smooth one).
     pub t: [f32; COAT_RES],
     /// r_int: diffuse internal reflectance.
@@ -66,28 +67,28 @@ pub fn fresnel_diffuse_reflectance(eta: f32) -> f32 {
     }
 }
 
-/// Rough coat reflectance R(mu) and transmittance t(mu) for incidence cosine mu (GGX,
+/// Rough coat reflectance R(mu) and transmittance t(mu) for incidence cosine mu (the
 /// relative index eta): the expectations over visible normals m ~ D_wo of F(wo.m) G1(wr, m)
 /// and (1 - F(wo.m)) G1(wt, m), on a midpoint grid of `n` x `n` cells of the sample square.
-pub fn rough_coat_rt(ggx: &Ggx, eta: f32, mu: f32, n: usize) -> (f64, f64) {
+pub fn rough_coat_rt(mf: &Microfacet, eta: f32, mu: f32, n: usize) -> (f64, f64) {
     let mu = mu.max(1e-6);
     let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let (mut r, mut t) = (0.0f64, 0.0f64);
     for i in 0..n {
         for j in 0..n {
             let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
-            let m = ggx.sample_visible(wo, u);
+            let m = mf.sample_visible(wo, u);
             let c = wo.dot(m);
             let (f, cos_t, eta_r) = fresnel_dielectric(c, eta);
             let wr = reflect(wo, m);
             if wr.z > 0.0 {
-                r += (f * ggx.g1(wr, m)) as f64;
+                r += (f * mf.g1(wr, m)) as f64;
             }
             if f < 1.0 {
                 // refracted: -eta_r wo + (eta_r c - cos_t) m (c > 0 here)
                 let wt = (-eta_r * wo + (eta_r * c - cos_t) * m).normalize();
                 if wt.z < 0.0 {
-                    t += ((1.0 - f) * ggx.g1(wt, m)) as f64;
+                    t += ((1.0 - f) * mf.g1(wt, m)) as f64;
                 }
             }
         }
@@ -97,17 +98,17 @@ pub fn rough_coat_rt(ggx: &Ggx, eta: f32, mu: f32, n: usize) -> (f64, f64) {
 }
 
 impl CoatTable {
-    fn compute(eta: f32, alpha: f32) -> CoatTable {
+    fn compute(eta: f32, alpha: f32, dist: Distribution) -> CoatTable {
         let mut t = [0.0f32; COAT_RES];
         let h = 1.0 / (COAT_RES - 1) as f64;
         let (mut t_hem, mut r_hem, mut r_int) = (0.0f64, 0.0f64, 0.0f64);
         if alpha > 0.0 {
-            let ggx = Ggx::new(alpha);
+            let mf = Microfacet::new(dist, alpha);
             for (i, ti) in t.iter_mut().enumerate() {
                 let mu = (i as f64 * h) as f32;
-                let (r_ext, t_ext) = rough_coat_rt(&ggx, eta, mu, 48);
+                let (r_ext, t_ext) = rough_coat_rt(&mf, eta, mu, 48);
                 // the internal side sees total internal reflection: a finer grid
-                let (r_in, _) = rough_coat_rt(&ggx, 1.0 / eta, mu, 96);
+                let (r_in, _) = rough_coat_rt(&mf, 1.0 / eta, mu, 96);
                 *ti = t_ext as f32;
                 // Mitsuba: r_int = 2 mean over the nodes of R_int(mu) mu
                 r_int += r_in * mu.max(1e-6) as f64 / COAT_RES as f64 * 2.0;
@@ -132,6 +133,7 @@ impl CoatTable {
         CoatTable {
             eta,
             alpha,
+            dist,
             t,
             r_int: r_int as f32,
             t_hem: t_hem as f32,
@@ -139,16 +141,17 @@ impl CoatTable {
         }
     }
 
-    /// The table for (eta, alpha), computed once per process and shared.
-    pub fn get(eta: f32, alpha: f32) -> &'static CoatTable {
-        static CACHE: OnceLock<Mutex<HashMap<(u32, u32), &'static CoatTable>>> = OnceLock::new();
-        let key = (eta.to_bits(), alpha.to_bits());
+    /// The table for (eta, alpha, distribution), computed once per process and shared.
+    pub fn get(eta: f32, alpha: f32, dist: Distribution) -> &'static CoatTable {
+        type Key = (u32, u32, Distribution);
+        static CACHE: OnceLock<Mutex<HashMap<Key, &'static CoatTable>>> = OnceLock::new();
+        let key = (eta.to_bits(), alpha.to_bits(), dist);
         let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
         if let Some(t) = cache.lock().unwrap().get(&key) {
             return t;
         }
         // computed outside the lock (a few ms); a race computes it twice, harmlessly
-        let table: &'static CoatTable = Box::leak(Box::new(CoatTable::compute(eta, alpha)));
+        let table: &'static CoatTable = Box::leak(Box::new(CoatTable::compute(eta, alpha, dist)));
         cache.lock().unwrap().entry(key).or_insert(table)
     }
 
@@ -179,7 +182,14 @@ pub struct Plastic {
 }
 
 impl Plastic {
-    pub fn new(kd: [f32; 3], specular: [f32; 3], eta: f32, alpha: f32, nonlinear: bool) -> Self {
+    pub fn new(
+        kd: [f32; 3],
+        specular: [f32; 3],
+        eta: f32,
+        alpha: f32,
+        dist: Distribution,
+        nonlinear: bool,
+    ) -> Self {
         let mean = |c: [f32; 3]| (c[0] + c[1] + c[2]) / 3.0;
         let (d, s) = (mean(kd), mean(specular));
         Plastic {
@@ -187,7 +197,7 @@ impl Plastic {
             specular,
             nonlinear,
             specular_weight: if d + s > 0.0 { s / (d + s) } else { 0.5 },
-            coat: CoatTable::get(eta, alpha.max(0.0)),
+            coat: CoatTable::get(eta, alpha.max(0.0), dist),
         }
     }
 
@@ -197,8 +207,8 @@ impl Plastic {
     }
 
     #[inline]
-    fn ggx(&self) -> Ggx {
-        Ggx::new(self.coat.alpha)
+    fn mf(&self) -> Microfacet {
+        Microfacet::new(self.coat.dist, self.coat.alpha)
     }
 
     /// kd' / eta^2: the base's reflectance after the series of internal bounces and the
@@ -234,7 +244,7 @@ impl Plastic {
             return Spectrum::ZERO;
         }
         let h = (wo + wi).normalize();
-        let g = self.ggx();
+        let g = self.mf();
         let v = g.d(h) * g.g(wo, wi, h) * fresnel_dielectric(wo.dot(h), self.coat.eta).0
             / (4.0 * wo.z * wi.z);
         Spectrum::from_rgb(self.specular) * v
@@ -247,7 +257,7 @@ impl Plastic {
             return 0.0;
         }
         let h = (wo + wi).normalize();
-        let g = self.ggx();
+        let g = self.mf();
         g.d(h) * g.g1(wo, h) / (4.0 * wo.z)
     }
 
@@ -256,7 +266,7 @@ impl Plastic {
         if self.is_smooth() || wo.z <= 0.0 {
             return None;
         }
-        let wi = reflect(wo, self.ggx().sample_visible(wo, u));
+        let wi = reflect(wo, self.mf().sample_visible(wo, u));
         (wi.z > 0.0).then_some(wi)
     }
 

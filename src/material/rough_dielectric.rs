@@ -1,5 +1,5 @@
 //! Rough dielectric interface (Walter, Marschner, Li and Torrance, "Microfacet models for
-//! refraction through rough surfaces", EGSR 2007; Mitsuba 3's `roughdielectric`), GGX with
+//! refraction through rough surfaces", EGSR 2007; Mitsuba 3's `roughdielectric`), GGX or Beckmann with
 //! Smith's separable G, reflection and refraction. Not two-sided: wo.z > 0 is outside
 //! (index 1), wo.z < 0 inside (index eta).
 //!
@@ -19,7 +19,7 @@
 //!   p_t = D_{wo'}(h_t) (1 - F) eta_i^2 |wi.h_t| / (eta_i wi.h_t + eta_o wo.h_t)^2.
 
 use super::dielectric::fresnel_dielectric;
-use super::microfacet::{reflect, Ggx};
+use super::microfacet::{reflect, Distribution, Microfacet};
 use super::BsdfSample;
 use crate::spectrum::Spectrum;
 use glam::{Vec2, Vec3};
@@ -29,6 +29,7 @@ pub struct RoughDielectric {
     /// Index inside relative to outside.
     pub eta: f32,
     pub alpha: f32,
+    pub dist: Distribution,
 }
 
 /// Which half vector and what the densities need, for one pair of directions.
@@ -41,8 +42,8 @@ struct Config {
 
 impl RoughDielectric {
     #[inline]
-    fn ggx(&self) -> Ggx {
-        Ggx::new(self.alpha)
+    fn mf(&self) -> Microfacet {
+        Microfacet::new(self.dist, self.alpha)
     }
 
     /// eta_i / eta_o for a refraction from the side of wo.
@@ -84,7 +85,7 @@ impl RoughDielectric {
         let Some(c) = self.config(wo, wi) else {
             return Spectrum::ZERO;
         };
-        let g = self.ggx();
+        let g = self.mf();
         let dg = g.d(c.h) * g.g(wo, wi, c.h);
         if dg <= 0.0 {
             return Spectrum::ZERO;
@@ -105,7 +106,7 @@ impl RoughDielectric {
         let Some(c) = self.config(wo, wi) else {
             return 0.0;
         };
-        let g = self.ggx();
+        let g = self.mf();
         let wo_up = if wo.z > 0.0 { wo } else { -wo };
         // D_{wo'}(h): the density of h among the normals visible from wo turned to +z
         let dv = g.pdf_visible(wo_up, c.h);
@@ -123,7 +124,7 @@ impl RoughDielectric {
         if wo.z == 0.0 {
             return None;
         }
-        let g = self.ggx();
+        let g = self.mf();
         let wo_up = if wo.z > 0.0 { wo } else { -wo };
         let m = g.sample_visible(wo_up, u);
         let c = wo.dot(m);

@@ -274,24 +274,41 @@ fn from_mtl_picks_the_model() {
 
 // ---- Microfacet models (issue 14) ----
 
-fn gold(alpha: f32) -> Bsdf {
+const GGX: Distribution = Distribution::Ggx;
+const BECKMANN: Distribution = Distribution::Beckmann;
+
+fn gold_of(dist: Distribution, alpha: f32) -> Bsdf {
     // Mitsuba's Au at its RGB wavelengths (roughly)
     Bsdf::Conductor(Conductor {
         eta: [0.143, 0.374, 1.442],
         k: [3.983, 2.385, 1.603],
         specular: [1.0; 3],
         alpha,
+        dist,
     })
 }
 
-fn rough_plastic(kd: f32, alpha: f32, nonlinear: bool) -> Bsdf {
+fn gold(alpha: f32) -> Bsdf {
+    gold_of(GGX, alpha)
+}
+
+fn rough_plastic_of(dist: Distribution, kd: f32, alpha: f32, nonlinear: bool) -> Bsdf {
     Bsdf::Plastic(Plastic::new(
         [kd, kd * 0.6, kd * 0.3],
         [1.0; 3],
         1.49,
         alpha,
+        dist,
         nonlinear,
     ))
+}
+
+fn rough_plastic(kd: f32, alpha: f32, nonlinear: bool) -> Bsdf {
+    rough_plastic_of(GGX, kd, alpha, nonlinear)
+}
+
+fn rough_glass(dist: Distribution, eta: f32, alpha: f32) -> Bsdf {
+    Bsdf::RoughDielectric(RoughDielectric { eta, alpha, dist })
 }
 
 /// The non-delta microfacet BSDFs (reflection only unless named "glass").
@@ -306,20 +323,16 @@ fn microfacet_bsdfs() -> Vec<(&'static str, Bsdf)> {
             rough_plastic(0.8, 0.4, true),
         ),
         ("smooth plastic", rough_plastic(0.5, 0.0, false)),
+        ("glass a=0.2", rough_glass(GGX, 1.5, 0.2)),
+        ("glass a=0.6", rough_glass(GGX, 1.33, 0.6)),
+        // Beckmann (Mitsuba's default distribution)
+        ("beckmann gold a=0.15", gold_of(BECKMANN, 0.15)),
+        ("beckmann gold a=0.7", gold_of(BECKMANN, 0.7)),
         (
-            "glass a=0.2",
-            Bsdf::RoughDielectric(RoughDielectric {
-                eta: 1.5,
-                alpha: 0.2,
-            }),
+            "beckmann rough plastic a=0.3",
+            rough_plastic_of(BECKMANN, 0.6, 0.3, false),
         ),
-        (
-            "glass a=0.6",
-            Bsdf::RoughDielectric(RoughDielectric {
-                eta: 1.33,
-                alpha: 0.6,
-            }),
-        ),
+        ("beckmann glass a=0.3", rough_glass(BECKMANN, 1.5, 0.3)),
     ]
 }
 
@@ -472,14 +485,16 @@ fn energy(b: &Bsdf, wo: Vec3, n: usize, seed: u64) -> (f64, f64) {
 
 #[test]
 fn microfacet_white_furnace() {
-    let white_metal = |alpha| {
+    let white_metal_of = |dist, alpha| {
         Bsdf::Conductor(Conductor {
             eta: [0.0; 3],
             k: [1e4; 3],
             specular: [1.0; 3],
             alpha,
+            dist,
         })
     };
+    let white_metal = |alpha| white_metal_of(GGX, alpha);
     let cases: Vec<(&str, Bsdf, Option<f64>)> = vec![
         // F = 1: the smooth perfect conductor reflects everything
         ("perfect conductor", white_metal(0.0), Some(1.0)),
@@ -490,6 +505,16 @@ fn microfacet_white_furnace() {
         ),
         ("perfect rough conductor a=0.5", white_metal(0.5), None),
         ("perfect rough conductor a=1", white_metal(1.0), None),
+        (
+            "beckmann perfect rough conductor a=0.01",
+            white_metal_of(BECKMANN, 0.01),
+            Some(1.0),
+        ),
+        (
+            "beckmann perfect rough conductor a=0.6",
+            white_metal_of(BECKMANN, 0.6),
+            None,
+        ),
         // eta = 1, k = 0: no interface, F = 0, nothing reflected
         (
             "index-matched conductor",
@@ -498,6 +523,7 @@ fn microfacet_white_furnace() {
                 k: [0.0; 3],
                 specular: [1.0; 3],
                 alpha: 0.3,
+                dist: GGX,
             }),
             Some(0.0),
         ),
@@ -514,23 +540,28 @@ fn microfacet_white_furnace() {
         ),
         (
             "rough dielectric a=0.01",
-            Bsdf::RoughDielectric(RoughDielectric {
-                eta: 1.5,
-                alpha: 0.01,
-            }),
+            rough_glass(GGX, 1.5, 0.01),
+            Some(1.0),
+        ),
+        ("rough dielectric a=0.5", rough_glass(GGX, 1.5, 0.5), None),
+        (
+            "beckmann rough dielectric a=0.01",
+            rough_glass(BECKMANN, 1.5, 0.01),
             Some(1.0),
         ),
         (
-            "rough dielectric a=0.5",
-            Bsdf::RoughDielectric(RoughDielectric {
-                eta: 1.5,
-                alpha: 0.5,
-            }),
+            "beckmann rough dielectric a=0.5",
+            rough_glass(BECKMANN, 1.5, 0.5),
             None,
         ),
         (
             "white rough plastic a=0.3",
-            Bsdf::Plastic(Plastic::new([1.0; 3], [1.0; 3], 1.5, 0.3, false)),
+            Bsdf::Plastic(Plastic::new([1.0; 3], [1.0; 3], 1.5, 0.3, GGX, false)),
+            None,
+        ),
+        (
+            "beckmann white rough plastic a=0.3",
+            Bsdf::Plastic(Plastic::new([1.0; 3], [1.0; 3], 1.5, 0.3, BECKMANN, false)),
             None,
         ),
     ];
@@ -555,7 +586,7 @@ fn microfacet_white_furnace() {
     }
     // The white smooth plastic reflects all: F + t_i (1 - Fdr_ext) / (eta^2 (1 - Fdr_int))
     // = 1 by the reciprocity of the coat, up to Mitsuba's fits of Fdr (within 0.5%).
-    let b = Bsdf::Plastic(Plastic::new([1.0; 3], [1.0; 3], 1.5, 0.0, false));
+    let b = Bsdf::Plastic(Plastic::new([1.0; 3], [1.0; 3], 1.5, 0.0, GGX, false));
     for deg in [0.0f32, 45.0, 80.0] {
         let (a, se) = energy(&b, wo_at(deg), 200_000, 43);
         assert!(
@@ -608,7 +639,7 @@ fn plastic_coat_tables() {
     use plastic::{fresnel_diffuse_reflectance, CoatTable};
     // A nearly smooth rough coat transmits 1 - F(mu) and reflects the diffuse Fresnel
     // reflectance from inside.
-    let t = CoatTable::get(1.5, 0.002);
+    let t = CoatTable::get(1.5, 0.002, GGX);
     for mu in [0.2f32, 0.5, 0.9, 1.0] {
         let want = 1.0 - dielectric::fresnel_dielectric(mu, 1.5).0;
         assert!(
@@ -638,10 +669,24 @@ fn plastic_coat_tables() {
             "eta {eta}: fit {fit} vs {exact}"
         );
     }
-    // the cache hands out one table per (eta, alpha)
+    // ... and so does a nearly smooth Beckmann coat
+    let b = CoatTable::get(1.5, 0.002, BECKMANN);
+    for mu in [0.2f32, 0.5, 0.9, 1.0] {
+        let want = 1.0 - dielectric::fresnel_dielectric(mu, 1.5).0;
+        assert!(
+            (b.transmittance(mu) - want).abs() < 3e-3,
+            "Beckmann t({mu})"
+        );
+    }
+    assert!((b.r_int - fdr).abs() < 0.01, "Beckmann r_int {}", b.r_int);
+    // the cache hands out one table per (eta, alpha, distribution)
     assert!(std::ptr::eq(
-        CoatTable::get(1.5, 0.3),
-        CoatTable::get(1.5, 0.3)
+        CoatTable::get(1.5, 0.3, GGX),
+        CoatTable::get(1.5, 0.3, GGX)
+    ));
+    assert!(!std::ptr::eq(
+        CoatTable::get(1.5, 0.3, GGX),
+        CoatTable::get(1.5, 0.3, BECKMANN)
     ));
 }
 

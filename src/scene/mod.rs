@@ -18,7 +18,7 @@ pub use texture::Texture;
 
 use crate::accel::Bvh;
 use crate::light::Lights;
-use crate::material::{AlbedoTable, Bsdf, Material};
+use crate::material::{AlbedoTable, Bsdf, Distribution, Material};
 use crate::math::{Bounds3, Vec2, Vec3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -49,8 +49,9 @@ pub struct MaterialDesc {
     pub model: Option<SurfaceModel>,
 }
 
-/// Surface models of Mitsuba 3's BSDF plugins (parameters in RGB; roughness is GGX alpha,
-/// isotropic; alpha 0 is the smooth interface).
+/// Surface models of Mitsuba 3's BSDF plugins (parameters in RGB; roughness is the alpha of
+/// the microfacet `distribution`, isotropic; alpha 0 is the smooth interface, whose
+/// distribution is unused).
 #[derive(Clone, Debug, PartialEq)]
 pub enum SurfaceModel {
     /// `conductor` / `roughconductor`: complex index of refraction eta + i k per channel,
@@ -60,6 +61,7 @@ pub enum SurfaceModel {
         k: [f32; 3],
         specular: [f32; 3],
         alpha: f32,
+        distribution: Distribution,
     },
     /// `plastic` / `roughplastic`: a diffuse base (`kd`, `map_kd`) under a dielectric coat of
     /// relative index `eta`; `nonlinear` is Mitsuba's parameter of that name.
@@ -67,11 +69,16 @@ pub enum SurfaceModel {
         eta: f32,
         specular: [f32; 3],
         alpha: f32,
+        distribution: Distribution,
         nonlinear: bool,
     },
     /// `dielectric` / `roughdielectric`: an interface of relative index `eta` (inside over
     /// outside).
-    Dielectric { eta: f32, alpha: f32 },
+    Dielectric {
+        eta: f32,
+        alpha: f32,
+        distribution: Distribution,
+    },
     /// `thindielectric`: a thin slab of index `eta` (no refraction of the direction).
     ThinDielectric { eta: f32 },
 }
@@ -414,6 +421,7 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             k,
             specular,
             alpha,
+            distribution,
         } => {
             if !(finite(&eta) && finite(&k) && finite(&specular)) {
                 return Err(
@@ -428,12 +436,14 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
                 k,
                 specular,
                 alpha,
+                dist: distribution,
             })
         }
         SurfaceModel::Plastic {
             eta,
             specular,
             alpha,
+            distribution,
             nonlinear,
         } => {
             if !eta_ok(eta) {
@@ -449,9 +459,20 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             if !alpha_ok(alpha) {
                 return Err(format!("alpha {alpha}: must be in [0, 4]"));
             }
-            Bsdf::Plastic(Plastic::new(kd, specular, eta, alpha, nonlinear))
+            Bsdf::Plastic(Plastic::new(
+                kd,
+                specular,
+                eta,
+                alpha,
+                distribution,
+                nonlinear,
+            ))
         }
-        SurfaceModel::Dielectric { eta, alpha } => {
+        SurfaceModel::Dielectric {
+            eta,
+            alpha,
+            distribution,
+        } => {
             if !eta_ok(eta) {
                 return Err(format!(
                     "eta {eta}: the indices inside and outside must be positive and differ"
@@ -461,7 +482,11 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
                 return Err(format!("alpha {alpha}: must be in [0, 4]"));
             }
             if alpha > 0.0 {
-                Bsdf::RoughDielectric(RoughDielectric { eta, alpha })
+                Bsdf::RoughDielectric(RoughDielectric {
+                    eta,
+                    alpha,
+                    dist: distribution,
+                })
             } else {
                 Bsdf::Dielectric(Dielectric { eta })
             }

@@ -29,7 +29,8 @@
 //! # conductor / roughconductor: eta, k (RGB, default the perfect mirror 0 + 1i),
 //! #   specular, alpha; plastic / roughplastic: eta, specular, alpha, nonlinear;
 //! # dielectric / roughdielectric: eta, alpha; thindielectric: eta.
-//! # (alpha defaults to 0.1 for the rough ones, as in Mitsuba)
+//! # (alpha defaults to 0.1 for the rough ones, as in Mitsuba; the rough ones also take
+//! # distribution = "ggx" (the default here) or "beckmann" (Mitsuba's default))
 //!
 //! [environment]          # light from far away (Mitsuba's constant / envmap)
 //! radiance = [1, 1, 1]   # constant radiance, or the scale of the map
@@ -42,6 +43,7 @@
 //! ```
 
 use super::{CameraDesc, RenderDefaults, SceneDesc};
+use crate::material::Distribution;
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -90,6 +92,7 @@ enum ModelSection {
         k: Option<[f32; 3]>,
         specular: Option<[f32; 3]>,
         alpha: Option<f32>,
+        distribution: Option<Distribution>,
     },
     Plastic {
         eta: Option<f32>,
@@ -100,6 +103,7 @@ enum ModelSection {
         eta: Option<f32>,
         specular: Option<[f32; 3]>,
         alpha: Option<f32>,
+        distribution: Option<Distribution>,
         nonlinear: Option<bool>,
     },
     Dielectric {
@@ -108,6 +112,7 @@ enum ModelSection {
     RoughDielectric {
         eta: Option<f32>,
         alpha: Option<f32>,
+        distribution: Option<Distribution>,
     },
     ThinDielectric {
         eta: Option<f32>,
@@ -116,6 +121,9 @@ enum ModelSection {
 
 /// Mitsuba's default roughness.
 const DEFAULT_ALPHA: f32 = 0.1;
+/// The distribution of a rough model that names none (GGX, kalos' first one; Mitsuba's
+/// XML default is Beckmann, which `xml.rs` keeps).
+const DEFAULT_DISTRIBUTION: Distribution = Distribution::Ggx;
 
 impl ModelSection {
     fn model(&self) -> super::SurfaceModel {
@@ -127,17 +135,20 @@ impl ModelSection {
                 k: k.unwrap_or([1.0; 3]),
                 specular: specular.or(one).unwrap(),
                 alpha: 0.0,
+                distribution: DEFAULT_DISTRIBUTION,
             },
             ModelSection::RoughConductor {
                 eta,
                 k,
                 specular,
                 alpha,
+                distribution,
             } => M::Conductor {
                 eta: eta.unwrap_or([0.0; 3]),
                 k: k.unwrap_or([1.0; 3]),
                 specular: specular.or(one).unwrap(),
                 alpha: alpha.unwrap_or(DEFAULT_ALPHA),
+                distribution: distribution.unwrap_or(DEFAULT_DISTRIBUTION),
             },
             ModelSection::Plastic {
                 eta,
@@ -147,26 +158,35 @@ impl ModelSection {
                 eta: eta.unwrap_or(1.49),
                 specular: specular.or(one).unwrap(),
                 alpha: 0.0,
+                distribution: DEFAULT_DISTRIBUTION,
                 nonlinear: nonlinear.unwrap_or(false),
             },
             ModelSection::RoughPlastic {
                 eta,
                 specular,
                 alpha,
+                distribution,
                 nonlinear,
             } => M::Plastic {
                 eta: eta.unwrap_or(1.49),
                 specular: specular.or(one).unwrap(),
                 alpha: alpha.unwrap_or(DEFAULT_ALPHA),
+                distribution: distribution.unwrap_or(DEFAULT_DISTRIBUTION),
                 nonlinear: nonlinear.unwrap_or(false),
             },
             ModelSection::Dielectric { eta } => M::Dielectric {
                 eta: eta.unwrap_or(1.5),
                 alpha: 0.0,
+                distribution: DEFAULT_DISTRIBUTION,
             },
-            ModelSection::RoughDielectric { eta, alpha } => M::Dielectric {
+            ModelSection::RoughDielectric {
+                eta,
+                alpha,
+                distribution,
+            } => M::Dielectric {
                 eta: eta.unwrap_or(1.5),
                 alpha: alpha.unwrap_or(DEFAULT_ALPHA),
+                distribution: distribution.unwrap_or(DEFAULT_DISTRIBUTION),
             },
             ModelSection::ThinDielectric { eta } => M::ThinDielectric {
                 eta: eta.unwrap_or(1.5),

@@ -6,8 +6,9 @@
 //!   `to_world` (`matrix`, `translate`, `rotate`, `scale`, `lookat`, composed in order: each
 //!   step left-multiplies), `flip_normals`, `face_normals`, `flip_tex_coords`;
 //! - BSDFs `diffuse`, `conductor`, `roughconductor`, `plastic`, `roughplastic`,
-//!   `dielectric`, `roughdielectric`, `thindielectric` (into `MaterialDesc.model`, with MTL
-//!   fields that render close to them until kalos shades the models), `twosided`, `mask`,
+//!   `dielectric`, `roughdielectric`, `thindielectric` (into `MaterialDesc.model`, rough
+//!   ones with their `distribution`, Beckmann unless it says ggx; the MTL fields are set
+//!   close to them too), `twosided`, `mask`,
 //!   `bumpmap`, `normalmap` (the nested BSDF; opacity and bumps warned), Mitsuba 0.6's
 //!   `phong` and `roughdiffuse`;
 //! - `rgb`, `srgb`, `spectrum` (a constant, `wavelength:value` lists and `.spd` files,
@@ -29,6 +30,7 @@
 //! read through `input` (regular files, size limit, byte-order mark).
 
 use super::{CameraDesc, EnvironmentDesc, MaterialDesc, PointLightDesc, SceneDesc, SurfaceModel};
+use crate::material::Distribution;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
@@ -1369,27 +1371,21 @@ impl<'a> Loader<'a> {
         Ok(x)
     }
 
-    /// GGX alpha of a rough plugin (alpha, or alpha_u / alpha_v: their geometric mean).
-    fn alpha(&self, el: &'a El, plugin: &str) -> R<f32> {
-        if let Some(d) = self.string(el, "distribution")? {
-            if d != "ggx" {
-                self.warn(
-                    &format!("distribution {d}"),
-                    format!(
-                        "{}: microfacet distribution '{d}' of {plugin}: kalos uses GGX with the same alpha",
-                        el.at
-                    ),
-                );
-            }
-        } else {
-            self.warn(
-                "distribution default",
+    /// Roughness and microfacet distribution of a rough plugin (alpha, or alpha_u / alpha_v:
+    /// their geometric mean; `distribution` Beckmann unless it says ggx, as in Mitsuba).
+    fn alpha(&self, el: &'a El, plugin: &str) -> R<(f32, Distribution)> {
+        let dist = match self.string(el, "distribution")? {
+            None => Distribution::Beckmann,
+            Some(d) => Distribution::from_name(d.trim()).ok_or_else(|| {
                 format!(
-                    "{}: {plugin} without a distribution is Beckmann in Mitsuba: kalos uses GGX with the same alpha",
+                    "{}: {plugin} distribution \"{d}\": must be \"beckmann\" or \"ggx\"",
                     el.at
-                ),
-            );
-        }
+                )
+            })?,
+        };
+        // Mitsuba's switch between visible-normal and plain D sampling: the same image
+        // (kalos always samples visible normals)
+        let _ = self.boolean(el, "sample_visible")?;
         let a = self.float(el, "alpha")?;
         let (u, v) = (self.float(el, "alpha_u")?, self.float(el, "alpha_v")?);
         let alpha = match (a, u, v) {
@@ -1415,7 +1411,7 @@ impl<'a> Loader<'a> {
                 el.at
             ));
         }
-        Ok(alpha.max(1e-4))
+        Ok((alpha.max(1e-4), dist))
     }
 
     /// Set `kd`/`map_kd` from a diffuse reflectance.
@@ -1488,10 +1484,10 @@ impl<'a> Loader<'a> {
                 }
             }
             "conductor" | "roughconductor" => {
-                let alpha = if kind == "roughconductor" {
+                let (alpha, distribution) = if kind == "roughconductor" {
                     self.alpha(el, kind)?
                 } else {
-                    0.0
+                    (0.0, Distribution::default())
                 };
                 let material = self.string(el, "material")?;
                 let (mut eta, mut k) = match &material {
@@ -1530,13 +1526,14 @@ impl<'a> Loader<'a> {
                     k,
                     specular,
                     alpha: if kind == "conductor" { 0.0 } else { alpha },
+                    distribution,
                 });
             }
             "plastic" | "roughplastic" => {
-                let alpha = if kind == "roughplastic" {
+                let (alpha, distribution) = if kind == "roughplastic" {
                     self.alpha(el, kind)?
                 } else {
-                    0.0
+                    (0.0, Distribution::default())
                 };
                 let eta =
                     self.ior(el, "int_ior", "polypropylene")? / self.ior(el, "ext_ior", "air")?;
@@ -1571,14 +1568,15 @@ impl<'a> Loader<'a> {
                     eta,
                     specular,
                     alpha: if kind == "plastic" { 0.0 } else { alpha },
+                    distribution,
                     nonlinear,
                 });
             }
             "dielectric" | "roughdielectric" | "thindielectric" => {
-                let alpha = if kind == "roughdielectric" {
+                let (alpha, distribution) = if kind == "roughdielectric" {
                     self.alpha(el, kind)?
                 } else {
-                    0.0
+                    (0.0, Distribution::default())
                 };
                 let eta = self.ior(el, "int_ior", "bk7")? / self.ior(el, "ext_ior", "air")?;
                 for k in ["specular_reflectance", "specular_transmittance"] {
@@ -1602,7 +1600,11 @@ impl<'a> Loader<'a> {
                     m.model = Some(SurfaceModel::ThinDielectric { eta });
                 } else {
                     m.ni = eta;
-                    m.model = Some(SurfaceModel::Dielectric { eta, alpha });
+                    m.model = Some(SurfaceModel::Dielectric {
+                        eta,
+                        alpha,
+                        distribution,
+                    });
                 }
             }
             "phong" => {
@@ -2601,8 +2603,14 @@ mod tests {
         .unwrap();
         let gold = &d.materials[d.material[0] as usize];
         match gold.model {
-            Some(SurfaceModel::Conductor { alpha, eta, .. }) => {
+            Some(SurfaceModel::Conductor {
+                alpha,
+                eta,
+                distribution,
+                ..
+            }) => {
                 assert_eq!(alpha, 0.25);
+                assert_eq!(distribution, Distribution::Ggx);
                 assert_eq!(eta[0], 0.143036);
             }
             ref m => panic!("{m:?}"),
@@ -2611,7 +2619,7 @@ mod tests {
         let last = &d.materials[*d.material.last().unwrap() as usize];
         assert_eq!(last.ke, [1.0, 2.0, 3.0]);
         match last.model {
-            Some(SurfaceModel::Dielectric { eta, alpha }) => {
+            Some(SurfaceModel::Dielectric { eta, alpha, .. }) => {
                 assert!((eta - 1.333 / 1.000277).abs() < 1e-5);
                 assert_eq!(alpha, 0.0);
             }
@@ -2630,6 +2638,8 @@ mod tests {
             ("<shape type=\"cube\"><float name=\"x\" value=\"$nope\"/></shape>", "undefined parameter $nope"),
             ("<shape type=\"sphere\"><float name=\"radius\" value=\"abc\"/></shape>", "not a number"),
             ("<sensor type=\"perspective\"><float name=\"fov\" value=\"200\"/></sensor><shape type=\"cube\"/>", "fov 200"),
+            ("<shape type=\"cube\"><bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"phong\"/></bsdf></shape>",
+             "t.xml:2: roughconductor distribution \"phong\": must be \"beckmann\" or \"ggx\""),
         ] {
             let e = scene(body).unwrap_err();
             assert!(e.contains(needle) && !e.contains('\n'), "{body}: {e}");

@@ -935,6 +935,7 @@ fn rough_glass_room() -> Scene {
     ball.model = Some(SurfaceModel::Dielectric {
         eta: 1.5,
         alpha: 0.3,
+        distribution: crate::material::Distribution::Ggx,
     });
     let mut floor = MaterialDesc::named("floor");
     floor.kd = [0.7, 0.4, 0.2];
@@ -942,6 +943,7 @@ fn rough_glass_room() -> Scene {
         eta: 1.5,
         specular: [1.0; 3],
         alpha: 0.2,
+        distribution: crate::material::Distribution::Ggx,
         nonlinear: false,
     });
     d.materials = vec![white, light, ball, floor];
