@@ -164,7 +164,15 @@ impl RenderJob {
             integrator: IntegratorSettings {
                 kind: self.integrator,
                 max_depth: self.max_depth.or(scene.defaults.max_depth).unwrap_or(-1),
-                roulette: self.roulette,
+                roulette: Roulette {
+                    min_depth: Some(
+                        self.roulette
+                            .min_depth
+                            .or(scene.defaults.rr_min_depth)
+                            .unwrap_or(0),
+                    ),
+                    ..self.roulette
+                },
                 gather: self.gather,
                 gather_depth: self.gather_depth,
                 radiosity: self.radiosity,
@@ -506,7 +514,7 @@ pub fn render_scene(
         integrator: job.integrator,
         rr: job.roulette.mode,
         rr_weight: job.roulette.weight,
-        rr_min_depth: job.roulette.min_depth,
+        rr_min_depth: set.integrator.roulette.min_depth.unwrap_or(0),
         bsdf_select: job.roulette.select,
         seed: job.seed,
         method: job.method,
@@ -547,7 +555,7 @@ mod tests {
         assert_eq!(j.roulette.mode, RrMode::Classic);
         assert_eq!(j.roulette.weight, RrWeight::Luminance);
         assert_eq!(j.roulette.select, BsdfSelect::Mixture);
-        assert_eq!(j.roulette.min_depth, 0);
+        assert_eq!(j.roulette.min_depth, None);
         assert_eq!(j.dtf.n, None);
         assert_eq!(j.dtf.eps_r, None);
         assert_eq!(j.dtf.categories, vec![0, 1, 10, 20, 50, 100, 200, 500]);

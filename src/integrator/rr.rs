@@ -133,9 +133,10 @@ pub struct Roulette {
     /// paper's methods 1, 2, 3, with termination folded in).
     #[arg(long = "bsdf-select", value_enum, default_value_t = BsdfSelect::Mixture)]
     pub select: BsdfSelect,
-    /// Reflections before roulette starts (0: at every reflection).
-    #[arg(long = "rr-min-depth", default_value_t = 0)]
-    pub min_depth: u32,
+    /// Reflections before roulette starts (0: at every reflection). Default 0, or what a
+    /// Mitsuba scene's integrator says (its rr_depth, 5 unless given, less one).
+    #[arg(long = "rr-min-depth")]
+    pub min_depth: Option<u32>,
 }
 
 impl Default for Roulette {
@@ -191,7 +192,7 @@ impl Roulette {
     /// Whether the walk may end at reflection `bounce` (0-based).
     #[inline]
     fn active(&self, bounce: u32) -> bool {
-        self.mode != RrMode::Off && bounce >= self.min_depth
+        self.mode != RrMode::Off && bounce >= self.min_depth.unwrap_or(0)
     }
 
     /// Continuation probability s at reflection `bounce` of a walk arriving with spectral

@@ -84,6 +84,7 @@ fn room() -> Result<SceneDesc, String> {
         res: Some((600, 600)),
         spp: None,
         max_depth: None,
+        rr_min_depth: None,
     };
     Ok(d)
 }
@@ -158,6 +159,7 @@ fn cornell_from(name: &str, obj: &str, mtl_text: &'static str) -> Result<SceneDe
         res: Some((256, 256)),
         spp: None,
         max_depth: None,
+        rr_min_depth: None,
     };
     Ok(d)
 }
@@ -260,6 +262,7 @@ fn furnace_room(name: &str) -> SceneDesc {
         res: Some((64, 64)),
         spp: None,
         max_depth: None,
+        rr_min_depth: None,
     };
     d
 }
@@ -359,6 +362,7 @@ fn caustic() -> SceneDesc {
         res: Some((256, 256)),
         spp: None,
         max_depth: None,
+        rr_min_depth: None,
     };
     d
 }
@@ -510,6 +514,7 @@ fn rw_room() -> SceneDesc {
         res: Some((256, 256)),
         spp: None,
         max_depth: None,
+        rr_min_depth: None,
     };
     d
 }

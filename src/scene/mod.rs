@@ -146,6 +146,8 @@ pub struct RenderDefaults {
     pub res: Option<(u32, u32)>,
     pub spp: Option<u32>,
     pub max_depth: Option<i32>,
+    /// Reflections before Russian roulette starts (`--rr-min-depth`).
+    pub rr_min_depth: Option<u32>,
 }
 
 /// A scene as plain data, before acceleration structures are built.

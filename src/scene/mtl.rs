@@ -156,7 +156,7 @@ struct Pbr {
 }
 
 /// Blender's Principled BSDF from what its exporter wrote, as a kalos surface model:
-/// roughness r (`Pr`, else from `Ns`), GGX alpha = r^2 (Blender's convention); metallic m
+/// roughness r (`Pr`, else from `Ns`), GGX (Blender's) alpha = r^2; metallic m
 /// (`Pm`, else `Ka` under `illum 3`); a dielectric (m < 0.5) is a diffuse base `Kd` under
 /// a coat whose normal-incidence reflectance is F0 = 0.08 s (Blender 2.8-3.x, s = `Ks`)
 /// or F0(`Ni`) 2 s (Blender 4's "IOR level"), of index eta = (1 + sqrt F0)/(1 - sqrt F0);
@@ -169,6 +169,7 @@ fn principled(
     writer: Writer,
 ) -> Option<(super::SurfaceModel, Option<String>)> {
     use super::SurfaceModel;
+    use crate::material::Distribution;
     if !matches!(m.illum, 2 | 3) {
         return None;
     }
@@ -210,6 +211,7 @@ fn principled(
                 k: [0.0; 3],
                 specular: [1.0; 3],
                 alpha,
+                distribution: Distribution::Ggx,
             },
             note,
         ));
@@ -227,6 +229,7 @@ fn principled(
             eta: eta_of(f0),
             specular: [1.0; 3],
             alpha,
+            distribution: Distribution::Ggx,
             nonlinear: false,
         },
         note,

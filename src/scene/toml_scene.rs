@@ -453,6 +453,7 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             res: r.res.map(|[w, h]| (w, h)),
             spp: r.spp,
             max_depth: r.max_depth,
+            rr_min_depth: None,
         };
     }
     Ok(desc)

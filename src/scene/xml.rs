@@ -2244,16 +2244,11 @@ impl<'a> Loader<'a> {
                     }
                     self.desc.defaults.max_depth = Some(d.min(i32::MAX as i64) as i32);
                 }
-                if let Some(p) = self.prop(el, "rr_depth") {
-                    self.warn(
-                        "rr_depth",
-                        format!(
-                            "{}: rr_depth {}: kalos' Russian roulette is set with --rr and --rr-min-depth",
-                            p.at,
-                            p.attr("value").unwrap_or("")
-                        ),
-                    );
-                }
+                // Mitsuba's roulette starts at depth rr_depth (default 5), counting the
+                // first hit as 1; kalos' --rr-min-depth counts the reflections before it.
+                let rr_depth = self.int(el, "rr_depth")?.unwrap_or(5);
+                self.desc.defaults.rr_min_depth =
+                    Some(rr_depth.saturating_sub(1).clamp(0, u32::MAX as i64) as u32);
                 if let Some(p) = self.prop(el, "hide_emitters") {
                     if p.attr("value") == Some("true") {
                         self.warn(
@@ -2448,6 +2443,11 @@ fn parse_inner(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> 
                 .and_then(|s| s.to_str())
                 .unwrap_or(file)
                 .to_string(),
+            // Mitsuba's default integrator (path) starts its roulette at rr_depth 5
+            defaults: crate::scene::RenderDefaults {
+                rr_min_depth: Some(4),
+                ..Default::default()
+            },
             ..Default::default()
         },
         ids: HashMap::new(),
@@ -2535,6 +2535,26 @@ mod tests {
             "t.xml",
             Path::new("."),
         )
+    }
+
+    /// Mitsuba's path integrator starts its roulette at depth rr_depth (5 by default, the
+    /// first hit counting 1): kalos' --rr-min-depth default becomes rr_depth - 1.
+    #[test]
+    fn rr_depth_becomes_the_roulette_default() {
+        let shape = r#"<shape type="rectangle"><bsdf type="diffuse"/></shape>"#;
+        assert_eq!(scene(shape).unwrap().defaults.rr_min_depth, Some(4));
+        let d = scene(&format!(
+            r#"<integrator type="path"><integer name="rr_depth" value="3"/></integrator>{shape}"#
+        ))
+        .unwrap();
+        assert_eq!(d.defaults.rr_min_depth, Some(2));
+        assert!(
+            d.warnings.iter().all(|w| !w.contains("rr_depth")),
+            "{:?}",
+            d.warnings
+        );
+        let d = scene(&format!(r#"<integrator type="path"/>{shape}"#)).unwrap();
+        assert_eq!(d.defaults.rr_min_depth, Some(4));
     }
 
     #[test]

@@ -23,7 +23,7 @@ pub fn settings(scene: &Scene, w: u32, h: u32) -> RenderSettings {
         integrator: IntegratorSettings {
             roulette: Roulette {
                 mode: RrMode::Classic,
-                min_depth: 0,
+                min_depth: Some(0),
                 ..Default::default()
             },
             ..Default::default()

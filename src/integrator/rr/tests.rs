@@ -9,7 +9,7 @@ fn roulette(mode: RrMode, weight: RrWeight, select: BsdfSelect) -> Roulette {
         mode,
         weight,
         select,
-        min_depth: 0,
+        min_depth: Some(0),
     }
 }
 
@@ -51,7 +51,10 @@ fn classic_uses_albedo_luminance() {
         ..r
     };
     assert_eq!(off.continuation(5, &one, &a), 1.0);
-    let late = Roulette { min_depth: 3, ..r };
+    let late = Roulette {
+        min_depth: Some(3),
+        ..r
+    };
     assert_eq!(late.continuation(2, &one, &a), 1.0);
     assert!(late.continuation(3, &one, &a) < 1.0);
 }
