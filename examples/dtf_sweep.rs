@@ -1,7 +1,7 @@
 //! Diagnostic: render plain path tracing and DTF's two phases once, then re-run the filter
 //! with variants of its parameters on the same films and compare them with a reference.
 //! `cargo run --release --example dtf_sweep -- SCENE REF.exr SPP N [WxH]`
-use kalos::filter::dtf::{dtf_filter, Clamp, DtfParams, Kernel};
+use kalos::filter::dtf::{dtf_filter, CdDisplay, Clamp, DtfParams, Kernel};
 use kalos::image_io::RgbImage;
 use kalos::integrator::IntegratorSettings;
 use kalos::metrics::{perceptual_error, rmse};
@@ -164,6 +164,41 @@ fn main() {
         ("stop none", |p| p.stop_ratio = 1e9),
         ("guard 2", |p| p.guard = 2.0),
         ("guard 5", |p| p.guard = 5.0),
+        ("cd scaled", |p| p.cd_display = CdDisplay::Scaled),
+        ("cd none", |p| p.cd_display = CdDisplay::None),
+        ("cd scaled mmax 8", |p| {
+            p.cd_display = CdDisplay::Scaled;
+            p.m_max = 8
+        }),
+        ("cd none mmax 8", |p| {
+            p.cd_display = CdDisplay::None;
+            p.m_max = 8
+        }),
+        ("mmax 12", |p| p.m_max = 12),
+        ("mmax 8 stop none", |p| {
+            p.m_max = 8;
+            p.stop_ratio = 1e9
+        }),
+        ("paper display", |p| p.paper_display = true),
+        ("mmax 8 stop none cd none", |p| {
+            p.m_max = 8;
+            p.stop_ratio = 1e9;
+            p.cd_display = CdDisplay::None
+        }),
+        ("mmax 8 stop none df0 0.003", |p| {
+            p.m_max = 8;
+            p.stop_ratio = 1e9;
+            p.df0_min = 0.003
+        }),
+        ("mmax 8 stop 5", |p| {
+            p.m_max = 8;
+            p.stop_ratio = 5.0
+        }),
+        ("mmax 8 stop none gaussian", |p| {
+            p.m_max = 8;
+            p.stop_ratio = 1e9;
+            p.kernel = Kernel::Gaussian
+        }),
         ("mmax 6 df0 0.001", |p| {
             p.m_max = 6;
             p.df0_min = 0.001

@@ -71,15 +71,33 @@ impl Allocation {
     }
 }
 
+/// How the display C = (C_d' n + C_i,f N) / (n + N) takes C_d' from phase 1.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum CdDisplay {
+    /// C_d' = g C_d: the pixel's own C_d at phase 2's local brightness g.
+    Scaled,
+    /// C_d' = sum_q f*[q - p] g_q C_d[q]: g C_d averaged with the same region weights f*
+    /// as C_i, so a flat region's display is smooth in both terms. The weights tend to the
+    /// primary pixel alone as N grows, and C_d's share n / (n + N) vanishes, so the image
+    /// stays asymptotically unbiased.
+    #[default]
+    Filtered,
+    /// C_d' left out of the display (C = C_i,f where N > 0): phase 1 serves only the
+    /// statistics, the allocation and the region forming.
+    None,
+}
+
 /// Parameters of DTF (paper §6 names n, eps_r, m_max and Delta f[0]_min as the four
 /// critical ones). Each option's name, help and default are written here once: the CLI
 /// flattens this struct, `Default` parses an empty command line, serde reads the same.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, clap::Args)]
 #[serde(default, deny_unknown_fields)]
 pub struct DtfParams {
-    /// DTF: dependent samples per pixel n in phase 1 (paper: 45..70; default: a quarter of
-    /// an spp budget within 8..50, 16 for a time budget, 50 with --dtf-eps: the paper's
-    /// experiments spent most samples in phase 2). The functions here read the actual
+    /// DTF: dependent samples per pixel n in phase 1 (paper: 45..70; default: 2 sqrt(spp)
+    /// of an spp budget within 8..50, i.e. 16 at 64 spp, 32 at 256, 50 from 625 on; 16 for
+    /// a time budget, 50 with --dtf-eps: the paper's experiments spent most samples in
+    /// phase 2). The functions here read the actual
     /// per-pixel counts from the films (they differ only where non-finite samples were
     /// rejected).
     #[arg(long = "dtf-n")]
@@ -93,19 +111,27 @@ pub struct DtfParams {
     /// 20, 50, 100").
     #[arg(long = "dtf-categories", value_delimiter = ',', default_values_t = [0u32, 1, 10, 20, 50, 100, 200, 500])]
     pub categories: Vec<u32>,
-    /// DTF: largest region side m_max (paper: 4 is enough).
-    #[arg(long = "dtf-mmax", default_value_t = 4)]
+    /// DTF: largest region side m_max (paper: 4 is enough; 8 lets flat regions average
+    /// more neighbours at low N, where the weights f* allow it: cornell 128x128, 64 and 256
+    /// spp, perceptual error 0.76x -> 0.72x and 0.67x -> 0.61x of plain, see the README).
+    #[arg(long = "dtf-mmax", default_value_t = 8)]
     pub m_max: u32,
     /// DTF: minimal decrease Delta f[0]_min of the primary weight f*[0] to grow a region
     /// (paper: 0.01).
     #[arg(long = "dtf-df0", default_value_t = 0.01, allow_hyphen_values = true)]
     pub df0_min: f32,
     /// DTF: display C = (C_d n + C_i N)/(n + N) with C_d as phase 1 gave it (the
-    /// paper's). By default C_d is first rescaled per channel so that its image sum,
-    /// weighted by N, matches phase 2's: all pixels share phase 1's random numbers, so its
-    /// error is shared by the whole image and otherwise sets the image's brightness.
+    /// paper's). By default C_d is first rescaled per channel to phase 2's local
+    /// brightness (all pixels share phase 1's random numbers, so its error is shared by
+    /// the whole image and otherwise sets the image's brightness) and then filtered as
+    /// --dtf-cd says.
     #[arg(long = "dtf-paper-display")]
     pub paper_display: bool,
+    /// DTF: how the display takes phase 1's C_d (unless --dtf-paper-display): filtered
+    /// (g C_d averaged with the region's weights f*, as C_i), scaled (the pixel's own g C_d)
+    /// or none (C_i,f alone where N > 0).
+    #[arg(long = "dtf-cd", value_enum, default_value_t = CdDisplay::Filtered)]
+    pub cd_display: CdDisplay,
     /// DTF: distance kernel d: pyramid (the paper's) or gaussian.
     #[arg(long = "dtf-kernel", value_enum, default_value_t = Kernel::Pyramid)]
     pub kernel: Kernel,
@@ -153,10 +179,11 @@ pub struct DtfParams {
     #[arg(long = "dtf-topup", default_value_t = 0.25)]
     pub top_up_share: f32,
     /// DTF: a region stops growing at a neighbour whose N exceeds this multiple of the
-    /// pixel's own (1 = the paper's rule "N[p] < N[q]"; 2.5 tolerates one category step:
+    /// pixel's own (1 = the paper's rule "N[p] < N[q]"; 5 tolerates two category steps:
     /// sigma^2 from n samples has a relative standard error of about sqrt(2 / (n - 1)), so
-    /// pixels of one flat region often land one category apart).
-    #[arg(long = "dtf-stop-ratio", default_value_t = 2.5)]
+    /// pixels of one flat region often land a category or two apart; the guard
+    /// (--dtf-guard) keeps regions with different phase-2 means apart).
+    #[arg(long = "dtf-stop-ratio", default_value_t = 5.0)]
     pub stop_ratio: f32,
     /// DTF: a neighbour's colour difference Delta_q is at least what phase 2 shows beyond
     /// this many standard errors (0 = off: Delta from the dependent phase alone, as printed).
@@ -171,13 +198,14 @@ impl Default for DtfParams {
 }
 
 impl DtfParams {
-    /// n for a budget: `--dtf-n` if given; else a quarter of an average spp budget within
-    /// 8..50 (the README's tables used 16 at 64-512 spp), 16 for a time budget, the paper's
-    /// 50 for a relative error.
+    /// n for a budget: `--dtf-n` if given; else 2 sqrt(spp) of an average spp budget within
+    /// 8..50 (cornell 128x128 at 256 spp: n = 16, 32, 50 gave perceptual errors 0.58x,
+    /// 0.60x, 0.66x of plain and RMSE 0.29x, 0.27x, 0.29x; the README), 16 for a time
+    /// budget, the paper's 50 for a relative error.
     pub fn n_for(&self, spp_budget: Option<f64>, relative: bool) -> u32 {
         match (self.n, spp_budget) {
             (Some(n), _) => n,
-            (None, Some(spp)) => ((spp / 4.0).round() as u32).clamp(8, 50),
+            (None, Some(spp)) => ((2.0 * spp.max(0.0).sqrt()).round() as u32).clamp(8, 50),
             (None, None) if relative => 50,
             (None, None) => 16,
         }

@@ -425,11 +425,33 @@ impl Dtf {
                         *v += wq * self.ci[cq.idx][ch];
                     }
                 }
-                // C = (C_d n + C_i N) / (n + N).
-                let g = self.cd_scale.get(p).copied().unwrap_or([1.0; 3]);
-                let cd = self.cd[p];
-                let cd = [cd[0] * g[0], cd[1] * g[1], cd[2] * g[2]];
-                let disp = combine(cd, self.n_dep[p], c, self.n_ind[p]);
+                // C = (C_d' n + C_i N) / (n + N), C_d' as `DtfParams::cd_display` says
+                // (the paper's C_d with `paper_display`).
+                let scaled = |q: usize| {
+                    let g = self.cd_scale.get(q).copied().unwrap_or([1.0; 3]);
+                    let cd = self.cd[q];
+                    [cd[0] * g[0], cd[1] * g[1], cd[2] * g[2]]
+                };
+                let mode = if self.params.paper_display {
+                    CdDisplay::Scaled
+                } else {
+                    self.params.cd_display
+                };
+                let disp = match mode {
+                    CdDisplay::Scaled => combine(scaled(p), self.n_dep[p], c, self.n_ind[p]),
+                    CdDisplay::Filtered => {
+                        let mut cdf = [0.0f64; 3];
+                        for (&wq, cq) in s.w.iter().zip(&s.cand) {
+                            let v = scaled(cq.idx);
+                            for (ch, o) in cdf.iter_mut().enumerate() {
+                                *o += wq * v[ch];
+                            }
+                        }
+                        combine(cdf, self.n_dep[p], c, self.n_ind[p])
+                    }
+                    CdDisplay::None if self.n_ind[p] > 0 => c,
+                    CdDisplay::None => combine(scaled(p), self.n_dep[p], c, 0),
+                };
                 let f32s = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32];
                 (m, s.w.len() as u32, s.w[0] as f32, f32s(c), f32s(disp))
             })

@@ -230,6 +230,7 @@ fn constant_image_passes_unchanged() {
             let params = DtfParams {
                 kernel,
                 clamp,
+                m_max: 4,
                 ..Default::default()
             };
             let dtf = setup(
@@ -249,8 +250,28 @@ fn constant_image_passes_unchanged() {
             // And it did form regions: interior pixels reach m_max.
             assert_eq!(out.m[3 * 9 + 4], 4, "{kernel:?} {clamp:?}");
             // Combined: C_d rescaled to phase 2's brightness (g = 0.35 / 0.3 in every
-            // window), so (g C_d * 50 + C_i * 20) / 70 = C_i.
+            // window), so (g C_d * 50 + C_i * 20) / 70 = C_i, whether g C_d is filtered
+            // (the default), the pixel's own, or left out.
             assert!((out.combined.data[10][0] as f64 - 0.35).abs() < 1e-6);
+            for cd_display in [CdDisplay::Scaled, CdDisplay::None] {
+                let p = DtfParams {
+                    cd_display,
+                    ..params.clone()
+                };
+                let o = setup(
+                    9,
+                    7,
+                    |_, _| px([0.3, 0.5, 0.7], [0.2, 0.1, 0.3], 50),
+                    |_, _| px([0.35, 0.45, 0.75], [0.2, 0.1, 0.3], 20),
+                    |_, _| 20,
+                    &p,
+                )
+                .run();
+                assert!(
+                    (o.combined.data[10][0] as f64 - 0.35).abs() < 1e-6,
+                    "{cd_display:?}"
+                );
+            }
             // The paper's display: (C_d * 50 + C_i * 20) / 70.
             let paper = DtfParams {
                 paper_display: true,
@@ -389,8 +410,8 @@ fn weights_non_negative_and_normalised_everywhere() {
 
 #[test]
 fn larger_neighbour_category_stops_region() {
-    // Neighbour (3, 2) has N = 50, five times the others' 10: beyond the default
-    // tolerance (2.5x), so it stops regions as in the paper.
+    // Neighbour (3, 2) has N = 100, ten times the others' 10: beyond the default
+    // tolerance (5x), so it stops regions as in the paper.
     let build = |big: u32, params: &DtfParams| {
         setup(
             6,
@@ -401,13 +422,17 @@ fn larger_neighbour_category_stops_region() {
             params,
         )
     };
+    let four = DtfParams {
+        m_max: 4,
+        ..Default::default()
+    };
     for (big, params) in [
-        (50, DtfParams::default()),
+        (100, four.clone()),
         (
             20,
             DtfParams {
                 stop_ratio: 1.0,
-                ..Default::default()
+                ..four.clone()
             },
         ),
     ] {
@@ -422,7 +447,7 @@ fn larger_neighbour_category_stops_region() {
     }
     // One category step (20 against 10) is within the noise of sigma^2 from n samples:
     // the default tolerates it, the paper's rule (ratio 1) does not.
-    let dtf = build(20, &DtfParams::default());
+    let dtf = build(20, &four);
     assert_eq!(dtf.weights(2, 2).m, 4);
 }
 
