@@ -1877,7 +1877,9 @@ impl<'a> Loader<'a> {
             _ => unreachable!(),
         };
         self.unused(el, &format!("shape '{kind}'"));
-        self.push_mesh(&mesh, xf, flip, face_normals, mat);
+        // a mesh file without normals is smooth-shaded in Mitsuba unless face_normals
+        let smooth = matches!(kind, "obj" | "ply") && mesh.normals.is_none() && !face_normals;
+        self.push_mesh(&mesh, xf, flip, face_normals, smooth, mat);
         Ok(())
     }
 
@@ -1898,7 +1900,23 @@ impl<'a> Loader<'a> {
         let has_uv = d.uvs.iter().all(|n| n.is_some()) && !d.uvs.is_empty();
         let mut normals = Vec::new();
         let mut uvs = Vec::new();
+        // Without normals or uvs, corners at one position are one vertex, as Mitsuba's OBJ
+        // loader shares a `v` index: its recomputed normals are smooth across them.
+        let weld = !has_n && !has_uv;
+        let mut index: HashMap<[u32; 3], u32> = HashMap::new();
         for (i, t) in d.positions.iter().enumerate() {
+            if weld {
+                let tri = t.map(|p| {
+                    *index
+                        .entry(p.to_array().map(f32::to_bits))
+                        .or_insert_with(|| {
+                            m.positions.push(p);
+                            m.positions.len() as u32 - 1
+                        })
+                });
+                m.triangles.push(tri);
+                continue;
+            }
             let b = m.positions.len() as u32;
             m.positions.extend_from_slice(t);
             if has_n {
@@ -1920,6 +1938,7 @@ impl<'a> Loader<'a> {
         xf: Mat4,
         flip: bool,
         face_normals: bool,
+        smooth: bool,
         mat: u32,
     ) {
         let nxf = Mat3::from_mat4(xf).inverse().transpose();
@@ -1936,15 +1955,19 @@ impl<'a> Loader<'a> {
             .iter()
             .map(|p| xf.transform_point3(*p))
             .collect();
-        let nrm: Option<Vec<Vec3>> = (!face_normals)
-            .then(|| {
-                m.normals.as_ref().map(|ns| {
-                    ns.iter()
-                        .map(|n| (nxf * *n).normalize_or_zero() * sign)
-                        .collect()
+        let nrm: Option<Vec<Vec3>> = if smooth {
+            Some(vertex_normals(&pos, &m.triangles, order))
+        } else {
+            (!face_normals)
+                .then(|| {
+                    m.normals.as_ref().map(|ns| {
+                        ns.iter()
+                            .map(|n| (nxf * *n).normalize_or_zero() * sign)
+                            .collect()
+                    })
                 })
-            })
-            .flatten();
+                .flatten()
+        };
         for t in &m.triangles {
             let i = order.map(|k| t[k] as usize);
             let v = i.map(|k| pos[k]);
@@ -2523,6 +2546,29 @@ fn parse_inner(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> 
         return Err(format!("{file}: the scene has no shapes kalos can render"));
     }
     Ok(desc)
+}
+
+/// Vertex normals of a mesh that has none, as Mitsuba recomputes them (in world space,
+/// after `to_world`): each face's unit normal added to its corners weighted by the
+/// corner's angle (Thuermer and Wuthrich 1998), then normalised; a vertex whose sum
+/// vanishes gets zero (its triangles keep their face normal).
+fn vertex_normals(pos: &[Vec3], tris: &[[u32; 3]], order: [usize; 3]) -> Vec<Vec3> {
+    let mut n = vec![Vec3::ZERO; pos.len()];
+    for t in tris {
+        let i = order.map(|k| t[k] as usize);
+        let v = i.map(|k| pos[k]);
+        let face = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+        if face == Vec3::ZERO {
+            continue;
+        }
+        for j in 0..3 {
+            let a = (v[(j + 1) % 3] - v[j]).normalize_or_zero();
+            let b = (v[(j + 2) % 3] - v[j]).normalize_or_zero();
+            let angle = a.dot(b).clamp(-1.0, 1.0).acos();
+            n[i[j]] += face * angle;
+        }
+    }
+    n.iter().map(|v| v.normalize_or_zero()).collect()
 }
 
 #[cfg(test)]
