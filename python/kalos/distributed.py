@@ -96,11 +96,7 @@ def render(
         from distributed import as_completed, get_client
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise ImportError("kalos.distributed needs Dask: pip install dask distributed") from e
-    if options.get("time") is not None:
-        raise ValueError("time: a distributed render splits a sample budget: give spp, not time")
-    method = options.get("method") or "plain"
-    if method not in ("plain", "dtf"):
-        raise ValueError(f"method {method!r}: only plain and dtf renders are distributed so far")
+    method = _distributable(options)
     if client is None:
         client = get_client()
     sc = scene if isinstance(scene, Scene) else load(scene)
@@ -173,6 +169,17 @@ def render(
     }
     img.warnings = []
     return img
+
+
+def _distributable(options: Dict[str, Any]) -> str:
+    """The method of a render that can be split into sample ranges, or ValueError: the
+    one place that says what is distributed (``render`` and ``kalos render --dask``)."""
+    if options.get("time") is not None:
+        raise ValueError("time: a distributed render splits a sample budget: give spp (--spp), not time (--time)")
+    method = options.get("method") or "plain"
+    if method not in ("plain", "dtf"):
+        raise ValueError(f"method {method!r}: only plain and dtf renders are distributed so far")
+    return method
 
 
 def render_dtf_part(spec: str, argv: List[str], dependent: bool, stream: int, first: int, n: int,
@@ -355,9 +362,9 @@ def main(argv: List[str]) -> int:
 
     t0 = time.perf_counter()
     try:
-        # refuse bad options and outputs before connecting (the CLI's messages)
-        if a["output"].lower().endswith(".kfilm") and (opts.get("method") or "plain") != "plain":
-            raise ValueError("-o/--output: a .kfilm film file holds a plain render's samples; --method dtf writes images only")
+        # refuse what cannot be distributed before connecting (the outputs were checked
+        # by the kalos binary that runs this)
+        _distributable(opts)
         sc = load(a["scene"])
         if not quiet:
             for w in sc.warnings:

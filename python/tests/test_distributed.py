@@ -139,8 +139,10 @@ def test_scheduler_and_workers_as_separate_processes(reference, cli, tmp_path):
             assert (tmp_path / "d.exr").read_bytes() == (tmp_path / "p.exr").read_bytes()
             # and its refusals are one line
             from conftest import cli_error
-            assert "give --spp, not --time" in cli_error(cli("render", "cornell", "--time", 1, "--dask", addr,
-                                                             check=False))
+            assert "give spp (--spp), not time" in cli_error(cli("render", "cornell", "--time", 1, "--dask", addr,
+                                                                 check=False))
+            assert "only plain and dtf" in cli_error(cli("render", "cornell", "--method", "rw", "--dask", addr,
+                                                         check=False))
             assert "--dtf-layers" in cli_error(cli("render", "cornell", "--dask", addr, "--dtf-layers",
                                                    "--method", "dtf", check=False))
         finally:

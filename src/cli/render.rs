@@ -165,7 +165,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         }
     }
     if let Some(addr) = &a.dask {
-        return run_on_dask(&a, &job, addr);
+        return run_on_dask(addr);
     }
     install_interrupt_handler();
     let progress = CliProgress::new(a.quiet);
@@ -225,21 +225,11 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     Ok(())
 }
 
-/// `kalos render --dask ADDRESS ...`: the same command line, run by the Python module's
-/// Dask front end (`python3 -m kalos render ...`, `python/kalos/distributed.py`), which
-/// splits the samples into tasks and merges their film parts exactly.
-fn run_on_dask(a: &RenderArgs, job: &RenderJob, addr: &str) -> Result<(), String> {
-    if a.dtf_layers || a.rw_layers || a.bdpt_strategies {
-        return Err("--dask: --dtf-layers, --rw-layers and --bdpt-strategies are written by a render in one process only".into());
-    }
-    if job.time.is_some() {
-        return Err(
-            "--dask: a distributed render splits a sample budget: give --spp, not --time".into(),
-        );
-    }
-    if !matches!(job.method, Method::Plain | Method::Dtf) {
-        return Err("--dask: only --method plain and dtf are distributed so far".into());
-    }
+/// `kalos render --dask ADDRESS ...`: the same command line (its job and outputs checked
+/// here), run by the Python module's Dask front end (`python3 -m kalos render ...`,
+/// `python/kalos/distributed.py`), which says what can be distributed, splits the
+/// samples into tasks and merges their film parts exactly.
+fn run_on_dask(addr: &str) -> Result<(), String> {
     let python = std::env::var_os("KALOS_PYTHON").unwrap_or_else(|| "python3".into());
     let shown = Path::new(&python).display().to_string();
     let check = std::process::Command::new(&python)
