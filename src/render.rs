@@ -90,6 +90,10 @@ pub struct RenderJob {
     /// Diffuse reflections before the gather looks up (1: the paper's first diffuse bounce).
     #[arg(long, default_value_t = 1)]
     pub gather_depth: u32,
+    /// Rays each gather point casts for its diffuse lookup (Chen et al.'s final gather; 1:
+    /// the paper's one path per trial).
+    #[arg(long, default_value_t = crate::integrator::gather::DEFAULT_GATHER_RAYS)]
+    pub gather_rays: u32,
     #[command(flatten)]
     pub radiosity: RadiositySettings,
     /// Mitsuba's max_depth: 1 = emitters seen directly, 2 = direct light, -1 = unlimited
@@ -175,6 +179,7 @@ impl RenderJob {
                 },
                 gather: self.gather,
                 gather_depth: self.gather_depth,
+                gather_rays: self.gather_rays,
                 radiosity: self.radiosity,
                 mis: self.bdpt_mis,
                 visible: crate::integrator::Visible::All,

@@ -72,6 +72,8 @@ pub struct IntegratorSettings {
     pub gather: Gather,
     /// Diffuse reflections traced before the gather looks up (1: the paper's first bounce).
     pub gather_depth: u32,
+    /// Rays per gather vertex for the diffuse lookup (1: the paper's one path per trial).
+    pub gather_rays: u32,
     /// The radiosity preprocess (for `--gather radiosity` and `--integrator radiosity`).
     pub radiosity: RadiositySettings,
     /// BDPT's weighting of the strategies.
@@ -89,6 +91,7 @@ impl Default for IntegratorSettings {
             roulette: Roulette::default(),
             gather: Gather::Off,
             gather_depth: 1,
+            gather_rays: gather::DEFAULT_GATHER_RAYS,
             radiosity: RadiositySettings::default(),
             mis: MisHeuristic::Balance,
             visible: Visible::All,
@@ -240,6 +243,13 @@ impl Integrator {
         }
         if set.gather_depth == 0 {
             return Err("--gather-depth: must be at least 1 (the first diffuse bounce)".into());
+        }
+        if !(1..=gather::MAX_GATHER_RAYS).contains(&set.gather_rays) {
+            return Err(format!(
+                "--gather-rays {}: must be between 1 (the paper's one path per trial) and {}",
+                set.gather_rays,
+                gather::MAX_GATHER_RAYS
+            ));
         }
         let estimate = set
             .roulette
