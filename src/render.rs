@@ -182,7 +182,6 @@ impl RenderJob {
                 gather_rays: self.gather_rays,
                 radiosity: self.radiosity,
                 mis: self.bdpt_mis,
-                visible: crate::integrator::Visible::All,
             },
         }
     }

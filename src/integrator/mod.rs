@@ -21,7 +21,6 @@ use crate::scene::{Camera, Scene};
 pub use bdpt::MisHeuristic;
 pub use gather::Gather;
 pub use rr::{BsdfSelect, RadianceEstimate, Roulette, RrMode, RrWeight};
-pub use visible::Visible;
 
 use crate::radiosity::{RadiositySettings, Solution};
 use std::sync::Arc;
@@ -78,9 +77,6 @@ pub struct IntegratorSettings {
     pub radiosity: RadiositySettings,
     /// BDPT's weighting of the strategies.
     pub mis: MisHeuristic,
-    /// Which part of the radiance a sample returns (`--method rw` separates the light
-    /// seen directly; every other render: all of it).
-    pub visible: Visible,
 }
 
 impl Default for IntegratorSettings {
@@ -94,7 +90,6 @@ impl Default for IntegratorSettings {
             gather_rays: gather::DEFAULT_GATHER_RAYS,
             radiosity: RadiositySettings::default(),
             mis: MisHeuristic::Balance,
-            visible: Visible::All,
         }
     }
 }
@@ -287,18 +282,8 @@ impl Integrator {
         i
     }
 
-    /// The same estimator returning the part `v` of each sample's radiance.
-    pub fn with_visible(&self, v: Visible) -> Integrator {
-        let mut i = self.clone();
-        i.set.visible = v;
-        i
-    }
-
     /// Whether this estimator sends splats (the film then keeps splat and batch sums).
     pub fn splats(&self) -> bool {
-        if self.set.visible == Visible::Only {
-            return false;
-        }
         match self.set.kind {
             IntegratorKind::Path | IntegratorKind::Radiosity => false,
             IntegratorKind::Bdpt => true,
@@ -307,8 +292,7 @@ impl Integrator {
         }
     }
 
-    /// One camera sample of pixel (x, y): its value (linear RGB), or the part of it that
-    /// `IntegratorSettings::visible` asks for; splats go to `sink`.
+    /// One camera sample of pixel (x, y): its value (linear RGB); splats go to `sink`.
     #[inline]
     #[allow(clippy::too_many_arguments)]
     pub fn sample<const N: usize>(
@@ -321,19 +305,28 @@ impl Integrator {
         sink: &mut SplatSink,
         c: &mut Counters,
     ) -> [f32; 3] {
-        match self.set.visible {
-            Visible::All => self.sample_all::<N>(scene, cam, x, y, s, sink, c),
-            Visible::Only => {
-                let ray = camera_ray(cam, x, y, s);
-                visible::emission::<N>(scene, ray, self.set.max_segments(), c).to_rgb()
-            }
-            Visible::Exclude => {
-                let ray = camera_ray(cam, x, y, &mut s.clone());
-                let f = visible::emission::<N>(scene, ray, self.set.max_segments(), c).to_rgb();
-                let l = self.sample_all::<N>(scene, cam, x, y, s, sink, c);
-                [l[0] - f[0], l[1] - f[1], l[2] - f[2]]
-            }
-        }
+        self.sample_all::<N>(scene, cam, x, y, s, sink, c)
+    }
+
+    /// One camera sample of a non-splatting estimator split in two (`visible.rs`): the
+    /// transport L - f(ray) and the light seen directly f(ray), whose sum is `sample`'s
+    /// value.
+    #[inline]
+    pub fn sample_split<const N: usize>(
+        &self,
+        scene: &Scene,
+        cam: &Camera,
+        x: u32,
+        y: u32,
+        s: &mut SampleStream,
+        c: &mut Counters,
+    ) -> ([f32; 3], [f32; 3]) {
+        let ray = camera_ray(cam, x, y, &mut s.clone());
+        let f = visible::emission::<N>(scene, ray, self.set.max_segments(), c).to_rgb();
+        let mut sink = SplatSink::new(1, 1);
+        let l = self.sample_all::<N>(scene, cam, x, y, s, &mut sink, c);
+        debug_assert!(sink.splats.is_empty(), "a split sample splatted");
+        ([l[0] - f[0], l[1] - f[1], l[2] - f[2]], f)
     }
 
     #[inline]

@@ -4,10 +4,11 @@
 //!
 //! Rushmeier and Ward's noise test and filter are about transport noise. A pixel on an
 //! emitter's edge varies from sample to sample only because its footprint straddles the
-//! edge, and its excess is real image structure, not noise to be spread. `Visible::Exclude`
-//! makes each sample return L - f(ray) (a control variate: any f keeps the estimate
-//! unbiased), and `Visible::Only` returns f(ray), so a method can test and filter the
-//! transport and add the light seen directly back unfiltered.
+//! edge, and its excess is real image structure, not noise to be spread.
+//! `Integrator::sample_split` returns L - f(ray) (a control variate: any f keeps the
+//! estimate unbiased) and f(ray) from one evaluation of the sample, and
+//! `pipeline::render_pass_split` writes them to two films, so a method can test and filter
+//! the transport and add the light seen directly back unfiltered.
 
 use crate::material::{dielectric::fresnel_dielectric, Bsdf};
 use crate::math::{offset_origin, Frame, Ray};
@@ -15,18 +16,6 @@ use crate::scene::Scene;
 use crate::spectrum::Spectrum;
 
 use super::Counters;
-
-/// Which part of a sample's radiance `Integrator::sample` returns.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Visible {
-    /// All of it (every render but the ones below).
-    #[default]
-    All,
-    /// Everything but the light seen directly: L - f(ray).
-    Exclude,
-    /// Only the light seen directly, f(ray).
-    Only,
-}
 
 /// Branches of a glass tree deeper than this are dropped (their weight is below F^8).
 const MAX_BRANCH_DEPTH: u32 = 8;

@@ -75,9 +75,25 @@ pub fn render_pass(p: &Pass, film: &mut Film, rays: Option<&mut [u64]>) -> Count
         *film = f;
     }
     match p.set.spectral {
-        SpectralMode::Rgb => pass::<3>(p, film, rays),
-        SpectralMode::Bands8 => pass::<8>(p, film, rays),
-        SpectralMode::Bands16 => pass::<16>(p, film, rays),
+        SpectralMode::Rgb => pass::<3>(p, film, None, rays),
+        SpectralMode::Bands8 => pass::<8>(p, film, None, rays),
+        SpectralMode::Bands16 => pass::<16>(p, film, None, rays),
+    }
+}
+
+/// A pass whose samples are split (`Integrator::sample_split`, for `--method rw`): the
+/// transport L - f(ray) to `film`, the light seen directly f(ray) to `visible`, from one
+/// evaluation of each sample. A sample rejected in either part is left out of both.
+pub fn render_pass_split(p: &Pass, film: &mut Film, visible: &mut Film) -> Counters {
+    assert!(
+        !p.integrator.splats() && film.splats.is_none(),
+        "split passes are for estimators that do not splat"
+    );
+    assert_eq!(film.pixels.len(), visible.pixels.len(), "films of one size");
+    match p.set.spectral {
+        SpectralMode::Rgb => pass::<3>(p, film, Some(visible), None),
+        SpectralMode::Bands8 => pass::<8>(p, film, Some(visible), None),
+        SpectralMode::Bands16 => pass::<16>(p, film, Some(visible), None),
     }
 }
 
@@ -92,14 +108,24 @@ struct RowOut {
     sink: SplatSink,
 }
 
-fn pass<const N: usize>(p: &Pass, film: &mut Film, rays: Option<&mut [u64]>) -> Counters {
+fn pass<const N: usize>(
+    p: &Pass,
+    film: &mut Film,
+    visible: Option<&mut Film>,
+    rays: Option<&mut [u64]>,
+) -> Counters {
     let set = p.set;
     let cam = Camera::new(set.camera, set.width, set.height);
     let w = film.width as usize;
+    let h = film.pixels.len() / w.max(1);
     let splatting = film.splats.is_some();
-    // One row: its samples into its pixels (or, when splatting, into the row's list), and
-    // (if asked) each pixel's rays.
-    let row = |y: usize, row: &mut [PixelStats], mut row_rays: Option<&mut [u64]>| {
+    // One row: its samples into its pixels (or, when splatting, into the row's list; when
+    // split, the light seen directly into the visible film's row), and (if asked) each
+    // pixel's rays.
+    let row = |y: usize,
+               row: &mut [PixelStats],
+               mut vis_row: Option<&mut [PixelStats]>,
+               mut row_rays: Option<&mut [u64]>| {
         let mut out = RowOut {
             sink: SplatSink::new(set.width, set.height),
             ..Default::default()
@@ -117,6 +143,18 @@ fn pass<const N: usize>(p: &Pass, film: &mut Film, rays: Option<&mut [u64]>) -> 
                 let index = p.first_index + k;
                 let mut s = SampleStream::new(&set.sampler, p.stream, pixel as u32, index);
                 out.sink.index = index;
+                if let Some(vr) = vis_row.as_deref_mut() {
+                    let (v, f) = p
+                        .integrator
+                        .sample_split::<N>(p.scene, &cam, x as u32, y as u32, &mut s, c);
+                    let mut r = Rejections::default();
+                    if r.check(&v) && r.check(&f) {
+                        px.push(v);
+                        vr[x].push(f);
+                    }
+                    out.rejected.add(&r);
+                    continue;
+                }
                 let v = p.integrator.sample::<N>(
                     p.scene,
                     &cam,
@@ -144,14 +182,23 @@ fn pass<const N: usize>(p: &Pass, film: &mut Film, rays: Option<&mut [u64]>) -> 
         p.progress.advance(done);
         out
     };
-    let rows = film.pixels.par_chunks_mut(w).enumerate();
-    let outs: Vec<RowOut> = match rays {
-        Some(r) => rows
-            .zip(r.par_chunks_mut(w))
-            .map(|((y, px), rr)| row(y, px, Some(rr)))
-            .collect(),
-        None => rows.map(|(y, px)| row(y, px, None)).collect(),
+    // each row's share of the optional outputs, as one list per output
+    let vis_rows: Vec<Option<&mut [PixelStats]>> = match visible {
+        Some(v) => v.pixels.chunks_mut(w).map(Some).collect(),
+        None => (0..h).map(|_| None).collect(),
     };
+    let ray_rows: Vec<Option<&mut [u64]>> = match rays {
+        Some(r) => r.chunks_mut(w).map(Some).collect(),
+        None => (0..h).map(|_| None).collect(),
+    };
+    let outs: Vec<RowOut> = film
+        .pixels
+        .par_chunks_mut(w)
+        .zip(vis_rows)
+        .zip(ray_rows)
+        .enumerate()
+        .map(|(y, ((px, vr), rr))| row(y, px, vr, rr))
+        .collect();
     let mut counters = Counters::default();
     for o in outs {
         counters.add(&o.counters);

@@ -22,12 +22,12 @@
 //! budget's average trials per pixel, and the passes stop when the budget is spent (a
 //! hard cap on the total trials, or on the wall clock for `--time`, pilot included).
 
-use super::render::{render_pass, Counts, Pass, RenderSettings};
+use super::render::{render_pass, render_pass_split, Counts, Pass, RenderSettings};
 use crate::film::Film;
 use crate::filter::energy::{
     self, converged, deviation, EnergyOutput, EnergyParams, Pilot, CEILING_FACTOR, PILOT_TRIALS,
 };
-use crate::integrator::{Counters, Integrator, Visible};
+use crate::integrator::{Counters, Integrator};
 use crate::progress::Progress;
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -322,35 +322,32 @@ pub fn render_rw(
     progress.begin("trials", planned);
     // The transport (tested and filtered) and the light seen directly (added back), from
     // the same samples: their sum is the plain estimate, sample by sample.
-    let (transport, direct) = if params.filter_emitters {
-        (integrator.clone(), None)
-    } else {
-        (
-            integrator.with_visible(Visible::Exclude),
-            Some(integrator.with_visible(Visible::Only)),
-        )
+    let split = !params.filter_emitters;
+    // One pass: split into `film` and `vfilm`, or whole into `film`.
+    let run = |p: &Pass, film: &mut Film, vfilm: &mut Film| {
+        if split {
+            render_pass_split(p, film, vfilm)
+        } else {
+            render_pass(p, film, None)
+        }
     };
     let mut pfilm = Film::new(pset.width, pset.height)?;
     let mut pvis = Film::new(pset.width, pset.height)?;
     let mut counters = Counters::default();
-    for (it, f) in [(Some(&transport), &mut pfilm), (direct.as_ref(), &mut pvis)] {
-        if let Some(it) = it {
-            counters.add(&render_pass(
-                &Pass {
-                    scene,
-                    integrator: it,
-                    set: &pset,
-                    counts: Counts::Uniform(PILOT_TRIALS),
-                    first_index: 0,
-                    stream: 1,
-                    progress,
-                },
-                f,
-                None,
-            ));
-        }
-    }
-    let pmean = sum_means(&pfilm, direct.as_ref().map(|_| &pvis));
+    counters.add(&run(
+        &Pass {
+            scene,
+            integrator,
+            set: &pset,
+            counts: Counts::Uniform(PILOT_TRIALS),
+            first_index: 0,
+            stream: 1,
+            progress,
+        },
+        &mut pfilm,
+        &mut pvis,
+    ));
+    let pmean = sum_means(&pfilm, split.then_some(&pvis));
     let ps: Vec<f64> = pfilm.pixels.iter().map(deviation).collect();
     let pilot = energy::pilot_of(&pmean, &ps, params.d)?;
     let pilot_seconds = t0.elapsed().as_secs_f64();
@@ -396,25 +393,16 @@ pub fn render_rw(
     progress.set_total(planned);
     let step = mt.div_ceil(4).max(1);
     let pass = |counts: Counts, first_index: u32, film: &mut Film, vfilm: &mut Film| {
-        let mut c = Counters::default();
-        for (it, f) in [(Some(&transport), film), (direct.as_ref(), vfilm)] {
-            if let Some(it) = it {
-                c.add(&render_pass(
-                    &Pass {
-                        scene,
-                        integrator: it,
-                        set,
-                        counts,
-                        first_index,
-                        stream: 0,
-                        progress,
-                    },
-                    f,
-                    None,
-                ));
-            }
-        }
-        c
+        let p = Pass {
+            scene,
+            integrator,
+            set,
+            counts,
+            first_index,
+            stream: 0,
+            progress,
+        };
+        run(&p, film, vfilm)
     };
     counters.add(&pass(Counts::Uniform(first), 0, &mut film, &mut vfilm));
     let mut trials = vec![first; pixels];
@@ -543,7 +531,7 @@ pub fn render_rw(
         energy::energy_filter_film(&film, &ep)?
     };
     // The light seen directly goes back in, unfiltered.
-    let vis = direct.as_ref().map(|_| &vfilm);
+    let vis = split.then_some(&vfilm);
     if let Some(v) = vis {
         for (o, p) in out.image.iter_mut().zip(&v.pixels) {
             let m = p.mean();
