@@ -6,7 +6,7 @@
 mod common;
 use common::*;
 use kalos::film::Film;
-use kalos::integrator::{BsdfSelect, RrMode, RrWeight};
+use kalos::integrator::{BsdfSelect, RrEstimate, RrMode, RrWeight};
 use kalos::options::name as opt;
 use kalos::pipeline::RenderSettings;
 use kalos::sampling::SamplerKind;
@@ -140,6 +140,28 @@ fn furnace_glossy_is_one_with_static_selection() {
     }
     let scene = Scene::build(desc, 0.0).unwrap();
     every_combination(&scene, "furnace-glossy n=1", &[BsdfSelect::Static]);
+}
+
+#[test]
+fn furnace_is_one_with_l_tilde_from_radiosity() {
+    // --rr-estimate radiosity: L~ read from a (coarse) radiosity solution at each hit
+    let scene = kalos::scene::load("furnace").unwrap();
+    for spectral in [SpectralMode::Rgb, SpectralMode::Bands8] {
+        for rr in [RrMode::Estimate, RrMode::SpectralEstimate] {
+            let mut set = settings(&scene, 8, 8);
+            set.spectral = spectral;
+            set.integrator.roulette.mode = rr;
+            set.integrator.roulette.estimate = RrEstimate::Radiosity;
+            set.integrator.radiosity.max_area = Some(0.5);
+            set.integrator.radiosity.source_level = 0;
+            set.integrator.radiosity.tolerance = 1e-2;
+            let what = format!(
+                "furnace {spectral:?} --rr {} --rr-estimate radiosity",
+                opt(&rr)
+            );
+            assert_furnace(&scene, &set, 256, &what);
+        }
+    }
 }
 
 #[test]

@@ -5,7 +5,7 @@
 mod common;
 use common::*;
 use kalos::film::Film;
-use kalos::integrator::{BsdfSelect, RrMode};
+use kalos::integrator::{BsdfSelect, RrEstimate, RrMode};
 use kalos::spectrum::SpectralMode;
 
 const RES: u32 = 24;
@@ -65,13 +65,28 @@ fn every_roulette_agrees_with_classic_on_cornell_glossy() {
         // Method 2 (static) has weights with an infinite-variance tail at the rim of
         // the Phong lobes (see tests/furnace.rs); a comparison within standard errors
         // means nothing for it.
-        for select in [BsdfSelect::Mixture, BsdfSelect::Decompose, BsdfSelect::Mis] {
-            for rr in [
-                RrMode::Classic,
-                RrMode::Spectral,
-                RrMode::Estimate,
-                RrMode::SpectralEstimate,
-            ] {
+        // L~ from the scene, and (mixture only) from a coarse radiosity solution
+        let cases = [BsdfSelect::Mixture, BsdfSelect::Decompose, BsdfSelect::Mis]
+            .into_iter()
+            .flat_map(|sel| {
+                [
+                    RrMode::Classic,
+                    RrMode::Spectral,
+                    RrMode::Estimate,
+                    RrMode::SpectralEstimate,
+                ]
+                .map(|rr| (sel, rr, RrEstimate::Scene))
+            })
+            .chain([
+                (BsdfSelect::Mixture, RrMode::Estimate, RrEstimate::Radiosity),
+                (
+                    BsdfSelect::Mixture,
+                    RrMode::SpectralEstimate,
+                    RrEstimate::Radiosity,
+                ),
+            ]);
+        for (select, rr, estimate) in cases {
+            {
                 if rr == RrMode::Classic && select == BsdfSelect::Mixture {
                     continue;
                 }
@@ -79,11 +94,16 @@ fn every_roulette_agrees_with_classic_on_cornell_glossy() {
                 v.sampler.seed = 11;
                 v.integrator.roulette.mode = rr;
                 v.integrator.roulette.select = select;
+                v.integrator.roulette.estimate = estimate;
+                v.integrator.radiosity.max_area = Some(0.2);
+                v.integrator.radiosity.source_level = 0;
+                v.integrator.radiosity.tolerance = 1e-2;
                 let film = render_spp(&scene, &v, 256);
                 let what = format!(
-                    "{spectral:?} --rr {} --bsdf-select {}",
+                    "{spectral:?} --rr {} --bsdf-select {} --rr-estimate {}",
                     kalos::options::name(&rr),
-                    kalos::options::name(&select)
+                    kalos::options::name(&select),
+                    kalos::options::name(&estimate)
                 );
                 assert_eq!(film.rejected.total(), 0, "{what}");
                 let (m, se) = mean_and_se(&film);

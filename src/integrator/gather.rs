@@ -56,7 +56,7 @@
 
 use super::camera_ray;
 use super::path::{DIMS_CAMERA, DIMS_PER_BOUNCE};
-use super::rr::{Selection, Step};
+use super::rr::{LTilde, Selection, Step};
 use super::{Counters, IntegratorSettings};
 use crate::material::Bsdf;
 use crate::math::{offset_origin, Frame, Ray, Vec3};
@@ -114,7 +114,7 @@ pub fn radiance<const N: usize>(
     s: &mut SampleStream,
     set: &IntegratorSettings,
     gather_depth: u32,
-    l_tilde: &Spectrum<N>,
+    l_tilde: &LTilde<N>,
     c: &mut Counters,
 ) -> Spectrum<N> {
     let mut l = Spectrum::<N>::ZERO;
@@ -226,7 +226,8 @@ pub fn radiance<const N: usize>(
 
         let step = sel.sample::<N>(&bsdf, wo_l, u_lobe, u_bsdf, u_rr);
         let terminated = matches!(step, Step::Terminated);
-        if let Some(e) = rr.estimate_term(&sel, &bsdf, terminated, &f_total, l_tilde) {
+        let lt = || l_tilde.at(hit.prim, hit.p, front);
+        if let Some(e) = rr.estimate_term(&sel, &bsdf, terminated, &f_total, lt) {
             l += e;
         }
         let Step::Continue { sample: bs, scale } = step else {
@@ -382,7 +383,14 @@ fn incident<const N: usize>(
                     if rest.max_depth >= 0 {
                         rest.max_depth -= segments as i32 - 1;
                     }
-                    let lp = super::path::radiance::<N>(scene, ray, s, &rest, &Spectrum::ZERO, c);
+                    let lp = super::path::radiance::<N>(
+                        scene,
+                        ray,
+                        s,
+                        &rest,
+                        &LTilde::Scene(Spectrum::ZERO),
+                        c,
+                    );
                     l += thr * (lp - le);
                 }
             }
@@ -490,7 +498,17 @@ pub fn sample_pixel<const N: usize>(
     c: &mut Counters,
 ) -> [f32; 3] {
     let ray = camera_ray(cam, x, y, s);
-    radiance::<N>(scene, sol, ray, s, set, gather_depth, &Spectrum::ZERO, c).to_rgb()
+    radiance::<N>(
+        scene,
+        sol,
+        ray,
+        s,
+        set,
+        gather_depth,
+        &LTilde::Scene(Spectrum::ZERO),
+        c,
+    )
+    .to_rgb()
 }
 
 #[cfg(test)]
@@ -562,7 +580,17 @@ mod tests {
                 ..Default::default()
             };
             let px = render(&scene, 16, 16, 64, &|ray, s, c| {
-                radiance::<3>(&scene, &sol, ray, s, &set, depth, &Spectrum::ZERO, c).to_rgb()
+                radiance::<3>(
+                    &scene,
+                    &sol,
+                    ray,
+                    s,
+                    &set,
+                    depth,
+                    &LTilde::Scene(Spectrum::ZERO),
+                    c,
+                )
+                .to_rgb()
             });
             let (m, se) = mean_se(&px);
             println!("gather depth {depth}, {rays} rays: mean {m:?} se {se:?}");
@@ -634,7 +662,17 @@ mod tests {
                     ..Default::default()
                 };
                 let px = render(&scene, 16, 16, 96, &|ray, s, c| {
-                    radiance::<3>(&scene, &sol, ray, s, &set, 1, &Spectrum::ZERO, c).to_rgb()
+                    radiance::<3>(
+                        &scene,
+                        &sol,
+                        ray,
+                        s,
+                        &set,
+                        1,
+                        &LTilde::Scene(Spectrum::ZERO),
+                        c,
+                    )
+                    .to_rgb()
                 });
                 block_means(&px, 16)
             };
@@ -668,7 +706,15 @@ mod tests {
         let sol = Solution::compute(&scene, &rset, 3, &crate::progress::Silent).unwrap();
         let set = IntegratorSettings::default();
         let p = render(&scene, 24, 24, 64, &|ray, s, c| {
-            super::super::path::radiance::<3>(&scene, ray, s, &set, &Spectrum::ZERO, c).to_rgb()
+            super::super::path::radiance::<3>(
+                &scene,
+                ray,
+                s,
+                &set,
+                &LTilde::Scene(Spectrum::ZERO),
+                c,
+            )
+            .to_rgb()
         });
         let (mp, sp) = mean_se(&p);
         for rays in [1, 8] {
@@ -677,7 +723,17 @@ mod tests {
                 ..Default::default()
             };
             let g = render(&scene, 24, 24, 64, &|ray, s, c| {
-                radiance::<3>(&scene, &sol, ray, s, &set, 1, &Spectrum::ZERO, c).to_rgb()
+                radiance::<3>(
+                    &scene,
+                    &sol,
+                    ray,
+                    s,
+                    &set,
+                    1,
+                    &LTilde::Scene(Spectrum::ZERO),
+                    c,
+                )
+                .to_rgb()
             });
             let (mg, sg) = mean_se(&g);
             println!("cornell gather ({rays} rays) {mg:?} se {sg:?}; path {mp:?} se {sp:?}");

@@ -20,7 +20,7 @@ use crate::scene::{Camera, Scene};
 
 pub use bdpt::MisHeuristic;
 pub use gather::Gather;
-pub use rr::{BsdfSelect, RadianceEstimate, Roulette, RrMode, RrWeight};
+pub use rr::{BsdfSelect, LTilde, RadianceEstimate, Roulette, RrEstimate, RrMode, RrWeight};
 
 use crate::radiosity::{RadiositySettings, Solution};
 use std::sync::Arc;
@@ -246,12 +246,29 @@ impl Integrator {
                 gather::MAX_GATHER_RAYS
             ));
         }
+        let reads_radiosity_l_tilde = set.roulette.estimate == RrEstimate::Radiosity;
+        if reads_radiosity_l_tilde {
+            if !set.roulette.mode.uses_estimate() {
+                return Err(format!(
+                    "--rr-estimate radiosity: --rr {} reads no L~; use --rr estimate or spectral-estimate",
+                    crate::options::name(&set.roulette.mode)
+                ));
+            }
+            if set.kind != IntegratorKind::Path {
+                return Err(format!(
+                    "--rr-estimate radiosity: only --integrator path reads L~ (not {})",
+                    crate::options::name(&set.kind)
+                ));
+            }
+        }
         let estimate = set
             .roulette
             .mode
             .uses_estimate()
             .then(|| RadianceEstimate::of_scene(scene));
-        let radiosity = if set.gather == Gather::Radiosity || set.kind == IntegratorKind::Radiosity
+        let radiosity = if set.gather == Gather::Radiosity
+            || set.kind == IntegratorKind::Radiosity
+            || reads_radiosity_l_tilde
         {
             Some(Arc::new(Solution::compute(
                 scene,
@@ -341,9 +358,16 @@ impl Integrator {
         sink: &mut SplatSink,
         c: &mut Counters,
     ) -> [f32; 3] {
-        let l_tilde = || match &self.estimate {
-            Some(e) => e.l_tilde::<N>(),
-            None => crate::spectrum::Spectrum::ZERO,
+        // L~ of the estimate roulette: the scene's, or read from the radiosity solution
+        let l_tilde = || {
+            let scene_l = match &self.estimate {
+                Some(e) => e.l_tilde::<N>(),
+                None => crate::spectrum::Spectrum::ZERO,
+            };
+            match (&self.radiosity, self.set.roulette.estimate) {
+                (Some(sol), RrEstimate::Radiosity) => LTilde::Radiosity(sol, scene_l),
+                _ => LTilde::Scene(scene_l),
+            }
         };
         match self.set.kind {
             IntegratorKind::Path => {

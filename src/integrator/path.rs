@@ -14,7 +14,7 @@
 //! and BSDF sampling, MIS-weighted; a ray that leaves the scene sees the environment);
 //! point lights are Dirac, reached by next-event estimation alone.
 
-use super::rr::Step;
+use super::rr::{LTilde, Step};
 use super::{Counters, IntegratorSettings};
 use crate::math::{offset_origin, Frame, Ray};
 use crate::sampling::{power_heuristic, SampleStream};
@@ -30,7 +30,7 @@ pub fn radiance<const N: usize>(
     mut ray: Ray,
     s: &mut SampleStream,
     set: &IntegratorSettings,
-    l_tilde: &Spectrum<N>,
+    l_tilde: &LTilde<N>,
     c: &mut Counters,
 ) -> Spectrum<N> {
     let mut l = Spectrum::<N>::ZERO;
@@ -106,7 +106,8 @@ pub fn radiance<const N: usize>(
         // Roulette and continuation (integrator/rr.rs).
         let step = sel.sample::<N>(&bsdf, wo_l, u_lobe, u_bsdf, u_rr);
         let terminated = matches!(step, Step::Terminated);
-        if let Some(e) = rr.estimate_term(&sel, &bsdf, terminated, &beta, l_tilde) {
+        let lt = || l_tilde.at(hit.prim, hit.p, wo.dot(hit.ng) > 0.0);
+        if let Some(e) = rr.estimate_term(&sel, &bsdf, terminated, &beta, lt) {
             l += e;
         }
         let Step::Continue { sample: bs, scale } = step else {
@@ -144,7 +145,7 @@ pub fn sample_pixel<const N: usize>(
     c: &mut Counters,
 ) -> [f32; 3] {
     let ray = super::camera_ray(cam, x, y, s);
-    radiance::<N>(scene, ray, s, set, &Spectrum::ZERO, c).to_rgb()
+    radiance::<N>(scene, ray, s, set, &LTilde::Scene(Spectrum::ZERO), c).to_rgb()
 }
 
 /// The environment's radiance along an escaping ray of direction `d`, MIS-weighted

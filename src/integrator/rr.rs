@@ -34,6 +34,7 @@
 //! sum to 1: the lobe is still selected, the walk never ends there.
 
 use crate::material::{Bsdf, BsdfSample, Lobe};
+use crate::radiosity::Solution;
 use crate::spectrum::Spectrum;
 use glam::{Vec2, Vec3};
 
@@ -56,6 +57,48 @@ pub enum RrMode {
     Estimate,
     /// Spectral roulette with the radiance estimate.
     SpectralEstimate,
+}
+
+/// Where the estimate roulette takes its L~.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum RrEstimate {
+    /// One scene-average value (the paper's).
+    #[default]
+    Scene,
+    /// The indirect radiance arriving at each hit, read from a radiosity solution computed
+    /// before the render (the scene's value where it has none: mirrors, glass).
+    Radiosity,
+}
+
+/// The estimate roulette's L~ at a reflection.
+#[derive(Clone, Copy)]
+pub enum LTilde<'a, const N: usize> {
+    /// One value for the whole scene (zero when the roulette reads none).
+    Scene(Spectrum<N>),
+    /// (B - E - B_direct) / (pi rho) from the solution at the hit, else the scene's value.
+    Radiosity(&'a Solution, Spectrum<N>),
+}
+
+impl<const N: usize> LTilde<'_, N> {
+    /// L~ at point `p` of triangle `prim`, reached on its `front` side or not.
+    #[inline]
+    pub fn at(&self, prim: u32, p: Vec3, front: bool) -> Spectrum<N> {
+        match self {
+            LTilde::Scene(l) => *l,
+            LTilde::Radiosity(sol, l) => sol.indirect_incident::<N>(prim, p, front).unwrap_or(*l),
+        }
+    }
 }
 
 impl RrMode {
@@ -137,6 +180,11 @@ pub struct Roulette {
     /// Mitsuba scene's integrator says (its rr_depth, 5 unless given, less one).
     #[arg(long = "rr-min-depth")]
     pub min_depth: Option<u32>,
+    /// Where --rr estimate / spectral-estimate take L~: scene (one scene-average value,
+    /// the paper's) or radiosity (the indirect radiance arriving at each hit, from a
+    /// radiosity solution computed before the render).
+    #[arg(long = "rr-estimate", value_enum, default_value_t = RrEstimate::Scene)]
+    pub estimate: RrEstimate,
 }
 
 impl Default for Roulette {
@@ -301,12 +349,12 @@ impl Roulette {
         bsdf: &Bsdf,
         terminated: bool,
         f: &Spectrum<N>,
-        l_tilde: &Spectrum<N>,
+        l_tilde: impl FnOnce() -> Spectrum<N>,
     ) -> Option<Spectrum<N>> {
         if !self.mode.uses_estimate() || sel.s_total >= 1.0 {
             return None;
         }
-        let a_l = *f * bsdf.albedo::<N>() * *l_tilde;
+        let a_l = *f * bsdf.albedo::<N>() * l_tilde();
         Some(if terminated {
             a_l
         } else {

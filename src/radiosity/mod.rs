@@ -120,6 +120,9 @@ pub struct Solution {
     pub element_b: Vec<f32>,
     /// Unshot radiosity dB per element, side and band when the solver stopped.
     pub element_unshot: Vec<f32>,
+    /// Mean indirect radiance arriving per element, side and band, (B - E - B_direct) /
+    /// (pi rho) (0 where rho is 0): the roulette's L~ for `--rr-estimate radiosity`.
+    pub element_indirect: Vec<f32>,
     /// Emitted radiosity E = pi L_e (front side) per scene triangle and band (empty for
     /// triangles that are not meshed).
     pub tri_e: Vec<Vec<f32>>,
@@ -254,6 +257,7 @@ impl Solution {
             }
         }
         let db = b.clone();
+        let de = b.clone();
         let mut sh = solve::Shooter {
             bvh: &scene.bvh,
             elems: &mesh.elems,
@@ -261,6 +265,8 @@ impl Solution {
             rho,
             b,
             db,
+            de,
+            direct: vec![0.0; 2 * ne * nb],
             patterns: solve::Patterns::new(set.source_level),
             emitted_power: emitted,
             shots: 0,
@@ -337,6 +343,28 @@ impl Solution {
             .collect();
         let element_b: Vec<f32> = sh.b.iter().map(|&v| v as f32).collect();
         let element_unshot: Vec<f32> = sh.db.iter().map(|&v| v as f32).collect();
+        // The roulette's L~ (`--rr-estimate radiosity`): the mean indirect radiance
+        // arriving at each patch, (B - E - B_direct) / (pi rho), the irradiance over pi
+        // without what came straight from the emitters (next-event estimation's part).
+        let mut element_indirect = vec![0.0f32; 2 * ne * nb];
+        for i in 0..ne {
+            for side in 0..2 {
+                let q = (2 * i + side) * nb;
+                for k in 0..nb {
+                    let r = sh.rho[i * nb + k];
+                    if r <= 0.0 {
+                        continue;
+                    }
+                    let e = if side == 0 {
+                        tri_e[mesh.elems[i].prim as usize][k] as f64
+                    } else {
+                        0.0
+                    };
+                    let ind = (sh.b[q + k] - e - sh.direct[q + k]).max(0.0);
+                    element_indirect[q + k] = (ind / (std::f64::consts::PI * r)) as f32;
+                }
+            }
+        }
         let stats = RadiosityStats {
             elements: ne as u64,
             vertices: nvtx as u64,
@@ -358,6 +386,7 @@ impl Solution {
             vertex_b,
             element_b,
             element_unshot,
+            element_indirect,
             tri_e,
             stats,
         })
@@ -420,6 +449,28 @@ impl Solution {
             }
         }
         Some(Spectrum(s).map(|v| v.max(0.0) * std::f32::consts::FRAC_1_PI))
+    }
+
+    /// The mean indirect radiance arriving at point `p` of triangle `prim` on side
+    /// `front` (its element's, per band): the roulette's L~. None if not meshed.
+    #[inline]
+    pub fn indirect_incident<const N: usize>(
+        &self,
+        prim: u32,
+        p: Vec3,
+        front: bool,
+    ) -> Option<Spectrum<N>> {
+        debug_assert_eq!(N, self.bands);
+        let Some(Some(tm)) = self.mesh.tris.get(prim as usize) else {
+            return None;
+        };
+        let (b1, b2) = mesh::barycentrics(tm.v0, tm.e1, tm.e2, p);
+        let (cell, _) = mesh::locate(tm.level, b1, b2);
+        let side = if front { 0 } else { 1 };
+        let q = (2 * (tm.first_elem + cell) as usize + side) * N;
+        let mut s = [0.0f32; N];
+        s.copy_from_slice(&self.element_indirect[q..q + N]);
+        Some(Spectrum(s))
     }
 
     /// Whether triangle `prim` has a solution (it is diffuse-like or emissive).

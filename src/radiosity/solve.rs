@@ -254,6 +254,10 @@ pub struct Shooter<'a> {
     /// B and dB per patch and band.
     pub b: Vec<f64>,
     pub db: Vec<f64>,
+    /// The part of dB that is emission not yet shot (E until the patch first shoots), and
+    /// per patch and band the radiosity received from those shots: the direct light.
+    pub de: Vec<f64>,
+    pub direct: Vec<f64>,
     pub patterns: Patterns,
     pub emitted_power: f64,
     pub shots: u64,
@@ -344,8 +348,15 @@ impl Shooter<'_> {
             .iter()
             .map(|&v| v * norm)
             .collect();
+        let shot_e: Vec<f64> = self.de[p * nb..(p + 1) * nb]
+            .iter()
+            .map(|&v| v * norm)
+            .collect();
         for b in &mut self.db[p * nb..(p + 1) * nb] {
             *b = 0.0;
+        }
+        for e in &mut self.de[p * nb..(p + 1) * nb] {
+            *e = 0.0;
         }
         for (j, f) in ff.iter().enumerate() {
             for (side, &fs) in f.iter().enumerate() {
@@ -357,6 +368,7 @@ impl Shooter<'_> {
                     let d = rho[j * nb + k] * shot[k] * fs as f64;
                     self.b[q + k] += d;
                     self.db[q + k] += d;
+                    self.direct[q + k] += rho[j * nb + k] * shot_e[k] * fs as f64;
                 }
             }
         }

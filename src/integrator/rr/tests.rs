@@ -244,8 +244,8 @@ fn estimate_roulette_is_unbiased_for_any_guess() {
             let sel = r.select::<3>(0, &f, &bsdf);
             let s = sel.s_total;
             assert!(s > 0.0 && s < 1.0, "{s}");
-            let stop = r.estimate_term(&sel, &bsdf, true, &f, &l_tilde).unwrap();
-            let go = r.estimate_term(&sel, &bsdf, false, &f, &l_tilde).unwrap();
+            let stop = r.estimate_term(&sel, &bsdf, true, &f, || l_tilde).unwrap();
+            let go = r.estimate_term(&sel, &bsdf, false, &f, || l_tilde).unwrap();
             let albedo = bsdf.albedo::<3>();
             for c in 0..3 {
                 let a_l = f[c] * albedo[c] * l_tilde[c];
@@ -259,7 +259,7 @@ fn estimate_roulette_is_unbiased_for_any_guess() {
     // the other roulettes add nothing
     let r = roulette(RrMode::Classic, RrWeight::Luminance, BsdfSelect::Mixture);
     let sel = r.select::<3>(0, &f, &bsdf);
-    assert!(r.estimate_term(&sel, &bsdf, true, &f, &l_tilde).is_none());
+    assert!(r.estimate_term(&sel, &bsdf, true, &f, || l_tilde).is_none());
 }
 
 /// sum_i s_i E_{p_i}[W_i / s_i] by stratified sampling of each lobe: must be the
