@@ -67,7 +67,7 @@ use crate::spectrum::Spectrum;
 use glam::Vec2;
 
 /// Gather rays per gather vertex unless `--gather-rays` says (measured: README).
-pub const DEFAULT_GATHER_RAYS: u32 = 8;
+pub const DEFAULT_GATHER_RAYS: u32 = 2;
 /// More gather rays than this are refused.
 pub const MAX_GATHER_RAYS: u32 = 4096;
 /// The conjugate of the golden ratio: the second coordinate of the gather's lattice.

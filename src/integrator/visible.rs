@@ -140,11 +140,6 @@ mod tests {
                 &crate::progress::Silent,
             )
             .unwrap();
-            let parts = [
-                it.clone(),
-                it.with_visible(Visible::Exclude),
-                it.with_visible(Visible::Only),
-            ];
             let cfg = SamplerConfig::default();
             let mut sink = SplatSink::new(w, h);
             let mut c = Counters::default();
@@ -153,20 +148,11 @@ mod tests {
                 for x in 0..w {
                     for k in 0..4 {
                         let s0 = SampleStream::new(&cfg, 0, y * w + x, k);
-                        let v: Vec<[f32; 3]> = parts
-                            .iter()
-                            .map(|i| {
-                                i.sample::<3>(
-                                    &scene,
-                                    &cam,
-                                    x,
-                                    y,
-                                    &mut s0.clone(),
-                                    &mut sink,
-                                    &mut c,
-                                )
-                            })
-                            .collect();
+                        let whole =
+                            it.sample::<3>(&scene, &cam, x, y, &mut s0.clone(), &mut sink, &mut c);
+                        let (t, f) =
+                            it.sample_split::<3>(&scene, &cam, x, y, &mut s0.clone(), &mut c);
+                        let v = [whole, t, f];
                         for ch in 0..3 {
                             let sum = v[1][ch] + v[2][ch];
                             assert!(

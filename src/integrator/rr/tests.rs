@@ -10,6 +10,7 @@ fn roulette(mode: RrMode, weight: RrWeight, select: BsdfSelect) -> Roulette {
         weight,
         select,
         min_depth: Some(0),
+        estimate: RrEstimate::Scene,
     }
 }
 
