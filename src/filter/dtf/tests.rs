@@ -819,13 +819,19 @@ fn dep_noise_takes_unshared_noise_out_of_delta_but_keeps_edges() {
     let flat = |_: u32, _: u32| 0.5;
     let f0 = run(&flat, 0.0, 1000).weights(4, 4).primary_weight();
     let f2 = run(&flat, 2.0, 1000).weights(4, 4).primary_weight();
-    assert!(f2 < 0.8 * f0, "f*[0] with dep-noise 2: {f2}, paper's Delta: {f0}");
+    assert!(
+        f2 < 0.8 * f0,
+        "f*[0] with dep-noise 2: {f2}, paper's Delta: {f0}"
+    );
     // A step far beyond the noise (1.0 above row 4, 0.3 from it on) stays apart.
     let step = |_: u32, y: u32| if y < 4 { 1.0 } else { 0.3 };
     for k in [0.0, 2.0] {
         let r = run(&step, k, 16).weights(4, 2);
         let across: f64 = r.weights.iter().filter(|q| q.1 >= 4).map(|q| q.2).sum();
-        assert_eq!(across, 0.0, "dep-noise {k}: weight across the step {across}");
+        assert_eq!(
+            across, 0.0,
+            "dep-noise {k}: weight across the step {across}"
+        );
     }
     // Without splats (a path tracer's film) the option changes nothing.
     let plain = |k: f32| {
