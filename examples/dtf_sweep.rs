@@ -28,13 +28,15 @@ fn report(
         }
     }
     let r_dim = (se / k.max(1) as f64).sqrt();
+    let mean = |im: &RgbImage| im.data.iter().map(|c| (c[0] + c[1] + c[2]) as f64).sum::<f64>();
+    let m = mean(img) / mean(reference);
     match base {
         Some((br, bp)) => println!(
-            "{name:<40} rmse {r:.5} ({:.2}x)  perc {p:.4} ({:.2}x)  rmse off lights {r_dim:.5}",
+            "{name:<40} rmse {r:.5} ({:.2}x)  perc {p:.4} ({:.2}x)  rmse off lights {r_dim:.5}  mean {m:.4}",
             r / br,
             p / bp
         ),
-        None => println!("{name:<40} rmse {r:.5}  perc {p:.4}  rmse off lights {r_dim:.5}"),
+        None => println!("{name:<40} rmse {r:.5}  perc {p:.4}  rmse off lights {r_dim:.5}  mean {m:.4}"),
     }
     (r, p)
 }
