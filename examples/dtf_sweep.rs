@@ -28,7 +28,12 @@ fn report(
         }
     }
     let r_dim = (se / k.max(1) as f64).sqrt();
-    let mean = |im: &RgbImage| im.data.iter().map(|c| (c[0] + c[1] + c[2]) as f64).sum::<f64>();
+    let mean = |im: &RgbImage| {
+        im.data
+            .iter()
+            .map(|c| (c[0] + c[1] + c[2]) as f64)
+            .sum::<f64>()
+    };
     let m = mean(img) / mean(reference);
     match base {
         Some((br, bp)) => println!(
