@@ -1,13 +1,15 @@
 //! Diagnostic: render plain path tracing and DTF's two phases once, then re-run the filter
 //! with variants of its parameters on the same films and compare them with a reference.
-//! `cargo run --release --example dtf_sweep -- SCENE REF.exr SPP N [WxH]`
+//! `cargo run --release --example dtf_sweep -- SCENE REF.exr SPP N [SEED] [path|bdpt]`
+//! (the reference's size is the render's; N = 0: the default n for SPP; the render's other
+//! settings are `kalos render`'s defaults). With `DTF_SWEEP_DUMP=DIR` the reference, plain,
+//! DTF and its layers are written there as .pfm (for numpy) and the N map as n.pfm.
 use kalos::filter::dtf::{dtf_filter, CdDisplay, Clamp, DtfParams, Kernel};
 use kalos::image_io::RgbImage;
-use kalos::integrator::IntegratorSettings;
+use kalos::integrator::IntegratorKind;
 use kalos::metrics::{perceptual_error, rmse};
 use kalos::pipeline::*;
-use kalos::sampling::*;
-use kalos::spectrum::SpectralMode;
+use kalos::render::RenderJob;
 
 fn report(
     name: &str,
@@ -17,13 +19,29 @@ fn report(
 ) -> (f64, f64) {
     let r = rmse(img, reference).unwrap();
     let p = perceptual_error(img, reference).unwrap().1;
+    // squared error off the emitters seen directly (reference luminance-ish norm > 3)
+    let (mut se, mut k) = (0.0f64, 0usize);
+    for (x, y) in img.data.iter().zip(&reference.data) {
+        if y[0] + y[1] + y[2] <= 3.0 {
+            se += (0..3).map(|c| ((x[c] - y[c]) as f64).powi(2)).sum::<f64>() / 3.0;
+            k += 1;
+        }
+    }
+    let r_dim = (se / k.max(1) as f64).sqrt();
+    let mean = |im: &RgbImage| {
+        im.data
+            .iter()
+            .map(|c| (c[0] + c[1] + c[2]) as f64)
+            .sum::<f64>()
+    };
+    let m = mean(img) / mean(reference);
     match base {
         Some((br, bp)) => println!(
-            "{name:<40} rmse {r:.5} ({:.2}x)  perc {p:.4} ({:.2}x)",
+            "{name:<40} rmse {r:.5} ({:.2}x)  perc {p:.4} ({:.2}x)  rmse off lights {r_dim:.5}  mean {m:.4}",
             r / br,
             p / bp
         ),
-        None => println!("{name:<40} rmse {r:.5}  perc {p:.4}"),
+        None => println!("{name:<40} rmse {r:.5}  perc {p:.4}  rmse off lights {r_dim:.5}  mean {m:.4}"),
     }
     (r, p)
 }
@@ -35,18 +53,25 @@ fn main() {
     let spp: u32 = a[3].parse().unwrap();
     let n: u32 = a[4].parse().unwrap();
     let seed: u64 = a.get(5).map(|s| s.parse().unwrap()).unwrap_or(0);
-    let set = RenderSettings {
-        width: reference.width,
-        height: reference.height,
-        camera: scene.camera,
-        spectral: SpectralMode::Rgb,
-        sampler: SamplerConfig {
-            kind: SamplerKind::Random,
-            seed,
-            dependent: false,
-        },
-        integrator: IntegratorSettings::default(),
+    let mut job = RenderJob::new(&a[1]);
+    job.res = Some((reference.width, reference.height));
+    job.seed = seed;
+    job.integrator = match a.get(6).map(|s| s.as_str()) {
+        None | Some("path") => IntegratorKind::Path,
+        Some("bdpt") => IntegratorKind::Bdpt,
+        Some(o) => panic!("integrator {o}: path or bdpt"),
     };
+    let set = job.settings(&scene);
+    let dump = std::env::var("DTF_SWEEP_DUMP")
+        .ok()
+        .map(std::path::PathBuf::from);
+    let save = |name: &str, im: &RgbImage| {
+        if let Some(d) = &dump {
+            std::fs::create_dir_all(d).unwrap();
+            kalos::image_io::write_image(&d.join(format!("{name}.pfm")), im, 0.0, &[]).unwrap();
+        }
+    };
+    save("ref", &reference);
     let integ = kalos::integrator::Integrator::prepare(
         &scene,
         set.integrator,
@@ -77,8 +102,9 @@ fn main() {
         );
     }
 
+    save("plain", &img(&plain.film));
     let p0 = DtfParams {
-        n: Some(n),
+        n: (n > 0).then_some(n),
         ..Default::default()
     };
     let run = render_dtf(
@@ -97,6 +123,20 @@ fn main() {
         Some(base),
     );
     report("dtf default", &run.out.combined, &reference, Some(base));
+    println!("n {} average N {:.1}", run.n, run.average_n());
+    save("dtf", &run.out.combined);
+    save("dependent", &img(&run.dependent));
+    save("independent", &img(&run.independent));
+    save("filtered", &run.out.filtered);
+    let grey = |v: Vec<f32>| {
+        RgbImage::new(
+            reference.width,
+            reference.height,
+            v.into_iter().map(|x| [x; 3]).collect(),
+        )
+    };
+    save("n", &grey(run.alloc.iter().map(|&x| x as f32).collect()));
+    save("m", &grey(run.out.m.iter().map(|&x| x as f32).collect()));
     // unfiltered combination
     let mut p = p0.clone();
     p.m_max = 1;
@@ -198,6 +238,21 @@ fn main() {
             p.m_max = 8;
             p.stop_ratio = 1e9;
             p.kernel = Kernel::Gaussian
+        }),
+        ("dep-noise 0 (paper Delta)", |p| p.dep_noise = 0.0),
+        ("dep-noise 1", |p| p.dep_noise = 1.0),
+        ("dep-noise 3", |p| p.dep_noise = 3.0),
+        ("z 1", |p| p.z = 1.0),
+        ("z 1.5", |p| p.z = 1.5),
+        ("z 2", |p| p.z = 2.0),
+        ("z 4", |p| p.z = 4.0),
+        ("z 2 guard 2", |p| {
+            p.z = 2.0;
+            p.guard = 2.0
+        }),
+        ("z 2 cd none", |p| {
+            p.z = 2.0;
+            p.cd_display = CdDisplay::None
         }),
         ("mmax 6 df0 0.001", |p| {
             p.m_max = 6;

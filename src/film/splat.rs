@@ -81,8 +81,8 @@ impl SplatFilm {
         self.sum[i].map(|s| s as f64 * k)
     }
 
-    /// Batch image b at pixel i.
-    fn batch_value(&self, i: usize, b: usize, pixels: usize) -> Option<[f64; 3]> {
+    /// Batch image b at pixel i (None when the batch has no camera sample there).
+    pub fn batch_value(&self, i: usize, b: usize, pixels: usize) -> Option<[f64; 3]> {
         let n = self.batch_n[i][b];
         if n == 0 {
             return None;

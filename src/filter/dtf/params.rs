@@ -189,6 +189,19 @@ pub struct DtfParams {
     /// this many standard errors (0 = off: Delta from the dependent phase alone, as printed).
     #[arg(long = "dtf-guard", default_value_t = 3.0)]
     pub guard: f32,
+    /// DTF over an estimator that splats (BDPT): Delta_q = ||C_d[p] - C_d[q]|| less the
+    /// noise the two pixels do not share, per channel sqrt((D^2 - k^2 SE^2)^+) with SE the
+    /// batch-means standard error of the difference D (0 = the paper's Delta). Over BDPT
+    /// each pixel's dependent samples have their own light subpath, so C_d's differences
+    /// between neighbours carry independent noise the paper's shared random numbers would
+    /// cancel, and regions stop growing where the image is flat. No effect without splats.
+    #[arg(long = "dtf-dep-noise", default_value_t = 2.0)]
+    pub dep_noise: f32,
+    /// DTF: the multiple of the noise's standard deviation in the filter's error bound
+    /// |sum f Delta| + z sigma sqrt(sum f^2 / N) that the weights f* minimise (paper: 3,
+    /// a 3-sigma bound; smaller values filter less).
+    #[arg(long = "dtf-z", default_value_t = 3.0)]
+    pub z: f32,
 }
 
 impl Default for DtfParams {
@@ -255,6 +268,15 @@ impl DtfParams {
             return Err(format!(
                 "dtf: top-up share = {}: must be between 0 and 1",
                 self.top_up_share
+            ));
+        }
+        if !(self.z.is_finite() && self.z > 0.0) {
+            return Err(format!("dtf: z = {}: must be a positive number", self.z));
+        }
+        if !(self.dep_noise.is_finite() && self.dep_noise >= 0.0) {
+            return Err(format!(
+                "dtf: dep-noise = {}: must be a number >= 0",
+                self.dep_noise
             ));
         }
         if !self.df0_min.is_finite() {

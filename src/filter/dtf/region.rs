@@ -2,7 +2,7 @@
 //! the displayed C = (C_d n + C_i,f N) / (n + N).
 
 use super::*;
-use crate::film::Film;
+use crate::film::{Film, BATCHES};
 use crate::image_io::RgbImage;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -171,6 +171,9 @@ pub struct Dtf {
     n_ind: Vec<u32>,
     /// Variance of C_i per channel (phase 2), for the independent guard.
     ci_var: Vec<[f64; 3]>,
+    /// Phase 1's batch images per pixel (`DtfParams::dep_noise`; empty without splats or
+    /// with dep_noise 0; NaN where a batch has no sample).
+    cd_batches: Vec<[[f64; 3]; BATCHES]>,
 }
 
 impl Dtf {
@@ -226,6 +229,17 @@ impl Dtf {
                 .into_par_iter()
                 .map(|i| film_variance_of_value(indep, i))
                 .collect(),
+            cd_batches: match &dep.splats {
+                Some(sp) if params.dep_noise > 0.0 => (0..dep.pixels.len())
+                    .map(|i| {
+                        std::array::from_fn(|b| {
+                            sp.batch_value(i, b, dep.pixels.len())
+                                .unwrap_or([f64::NAN; 3])
+                        })
+                    })
+                    .collect(),
+                _ => Vec::new(),
+            },
         })
     }
 
@@ -264,6 +278,36 @@ impl Dtf {
             .sum::<f64>()
     }
 
+    /// Delta_q from phase 1: ||C_d[p] - C_d[q]||, or with `dep_noise` k and batch images
+    /// (an estimator that splats) per channel sqrt((D^2 - k^2 SE^2)^+), SE^2 the batch-means
+    /// variance of the difference D = C_d[p] - C_d[q]: the part of D that the two pixels'
+    /// own (unshared) noise explains is taken out, as E[D^2] = true^2 + SE^2.
+    #[inline]
+    fn dep_delta(&self, p: usize, q: usize) -> f64 {
+        let (a, b) = (self.cd[p], self.cd[q]);
+        if self.cd_batches.is_empty() {
+            return diff_norm(a, b);
+        }
+        let k2 = (self.params.dep_noise as f64).powi(2);
+        let (bp, bq) = (&self.cd_batches[p], &self.cd_batches[q]);
+        let nb = BATCHES as f64;
+        (0..3)
+            .map(|c| {
+                let d = a[c] - b[c];
+                let mean = (0..BATCHES).map(|j| bp[j][c] - bq[j][c]).sum::<f64>() / nb;
+                let ss = (0..BATCHES)
+                    .map(|j| (bp[j][c] - bq[j][c] - mean).powi(2))
+                    .sum::<f64>();
+                let se2 = ss / (nb * (nb - 1.0));
+                if se2.is_finite() {
+                    (d * d - k2 * se2).max(0.0).sqrt()
+                } else {
+                    d.abs()
+                }
+            })
+            .sum()
+    }
+
     /// d(q - p) for window side m.
     #[inline]
     fn kernel(&self, dx: i32, dy: i32, m: u32) -> f64 {
@@ -300,7 +344,6 @@ impl Dtf {
             return 1;
         }
         let np_stop = self.alloc[p] as f64 * self.params.stop_ratio as f64;
-        let cdp = self.cd[p];
         let sqrt_n = (big_n as f64).sqrt();
 
         // Current (clipped, inclusive) window and sum_r Delta_r, both grown incrementally:
@@ -335,7 +378,7 @@ impl Dtf {
                         continue;
                     }
                     // Delta_q = ||C_d[p] - C_d[q]||.
-                    let delta = diff_norm(cdp, self.cd[q]).max(self.guard_delta(p, q));
+                    let delta = self.dep_delta(p, q).max(self.guard_delta(p, q));
                     sum_delta += delta;
                     s.cand.push(Cand {
                         idx: q,
@@ -350,7 +393,7 @@ impl Dtf {
             // Unnormalised coefficients f, clipped to f^+. M is the number of pixels
             // actually in the window, so that sum f = 1 holds at the image border too.
             let big_m = s.cand.len() as f64;
-            let k = sqrt_n / (3.0 * sg * big_m.sqrt());
+            let k = sqrt_n / (self.params.z as f64 * sg * big_m.sqrt());
             if !k.is_finite() {
                 return m_acc;
             }

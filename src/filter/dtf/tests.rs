@@ -783,3 +783,70 @@ mod robust_tests {
         }
     }
 }
+
+/// A phase-1 film with splat batches (as BDPT's): every pixel's n samples carry their own
+/// noise (uniform, half-width 0.2) around `base(x, y)`, as each pixel's own light subpath
+/// gives them.
+fn splat_dependent(w: u32, h: u32, n: u32, base: impl Fn(u32, u32) -> f64) -> Film {
+    let mut f = Film::with_splats(w, h).unwrap();
+    for k in 0..n {
+        for y in 0..h {
+            for x in 0..w {
+                let v = (base(x, y) + 0.4 * (hash(x, y, k) - 0.5)) as f32;
+                let i = f.index(x, y);
+                f.add_sample(i, k, [v; 3]);
+                f.splats.as_mut().unwrap().add_light_path(k);
+            }
+        }
+    }
+    f
+}
+
+#[test]
+fn dep_noise_takes_unshared_noise_out_of_delta_but_keeps_edges() {
+    let (w, h) = (8, 8);
+    let run = |base: &dyn Fn(u32, u32) -> f64, dep_noise: f32, big_n: u32| {
+        let d = splat_dependent(w, h, 32, base);
+        let i = film(w, h, |x, y| px(grey(base(x, y)), grey(0.115), big_n));
+        let params = DtfParams {
+            dep_noise,
+            guard: 0.0,
+            ..Default::default()
+        };
+        Dtf::new(&d, &i, &vec![big_n; (w * h) as usize], &params).unwrap()
+    };
+    // A flat field: the paper's Delta sees the pixels' own noise as colour differences.
+    let flat = |_: u32, _: u32| 0.5;
+    let f0 = run(&flat, 0.0, 1000).weights(4, 4).primary_weight();
+    let f2 = run(&flat, 2.0, 1000).weights(4, 4).primary_weight();
+    assert!(
+        f2 < 0.8 * f0,
+        "f*[0] with dep-noise 2: {f2}, paper's Delta: {f0}"
+    );
+    // A step far beyond the noise (1.0 above row 4, 0.3 from it on) stays apart.
+    let step = |_: u32, y: u32| if y < 4 { 1.0 } else { 0.3 };
+    for k in [0.0, 2.0] {
+        let r = run(&step, k, 16).weights(4, 2);
+        let across: f64 = r.weights.iter().filter(|q| q.1 >= 4).map(|q| q.2).sum();
+        assert_eq!(
+            across, 0.0,
+            "dep-noise {k}: weight across the step {across}"
+        );
+    }
+    // Without splats (a path tracer's film) the option changes nothing.
+    let plain = |k: f32| {
+        setup(
+            w,
+            h,
+            |x, y| px(grey(0.5 + 0.05 * hash(x, y, 7)), grey(0.1), 32),
+            |_, _| px(grey(0.5), grey(0.1), 100),
+            |_, _| 100,
+            &DtfParams {
+                dep_noise: k,
+                ..Default::default()
+            },
+        )
+        .weights(4, 4)
+    };
+    assert_eq!(plain(0.0), plain(2.0));
+}
