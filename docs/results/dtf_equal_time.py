@@ -4,7 +4,7 @@
 Usage: python3 docs/results/dtf_equal_time.py RESULTS.csv [BASELINE_CONFIG=path] [TIME_RATIO]
 
 With TIME_RATIO (one number, or per budget "64:1.2,256:1.1"; the config's wall-clock time over the baseline's at equal spp, measured
-side by side by dtf_time_ab.py), the baseline's error at equal time is read off its
+side by side by time_ab.py or dtf_time_ab.py), the baseline's error at equal time is read off its
 error-versus-*spp* curve at spp x TIME_RATIO instead: on a shared machine the seconds of
 runs made one after another differ with the load more than the methods do.
 Without it:
