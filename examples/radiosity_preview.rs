@@ -51,7 +51,7 @@ fn main() -> Result<(), String> {
                         &mut s,
                         &iset,
                         1,
-                        &kalos::spectrum::Spectrum::ZERO,
+                        &kalos::integrator::LTilde::Scene(kalos::spectrum::Spectrum::ZERO),
                         &mut c,
                     ),
                 }

@@ -6,7 +6,7 @@
 //!
 //! Run: cargo run --release --example rr_ltilde [SCENE] [RES] [SPP]
 
-use kalos::integrator::{path, Counters, IntegratorSettings};
+use kalos::integrator::{path, Counters, IntegratorSettings, LTilde};
 use kalos::math::{offset_origin, Frame, Ray};
 use kalos::sampling::{square_to_cosine_hemisphere, SampleStream, SamplerConfig};
 use kalos::scene::Camera;
@@ -42,7 +42,14 @@ fn main() {
                 let wi = Frame::from_normal(ng).to_world(square_to_cosine_hemisphere(s.next_2d()));
                 let r = Ray::new(offset_origin(hit.p, ng, wi), wi);
                 let mut s2 = SampleStream::new(&cfg, 8, y * res + x, k);
-                let l = path::radiance::<3>(&scene, r, &mut s2, &set, &Spectrum::ZERO, &mut c);
+                let l = path::radiance::<3>(
+                    &scene,
+                    r,
+                    &mut s2,
+                    &set,
+                    &LTilde::Scene(Spectrum::ZERO),
+                    &mut c,
+                );
                 // leave out the emission seen directly (L~ is reflected light only)
                 let mut direct = [0.0f32; 3];
                 if let Some(h2) = scene.intersect(&r, f32::INFINITY) {
