@@ -157,6 +157,110 @@ pub fn point_to_element(
     (f, rays)
 }
 
+/// A planar ideal mirror of the scene (a `Bsdf::Mirror` triangle, both sides reflect):
+/// the emitters' first shots also reach receivers through it.
+#[derive(Clone, Debug)]
+pub struct MirrorTri {
+    pub p0: Vec3,
+    pub e1: Vec3,
+    pub e2: Vec3,
+    /// Unit normal of its plane.
+    pub n: Vec3,
+    /// Its reflectance per band.
+    pub ks: Vec<f64>,
+}
+
+impl MirrorTri {
+    /// Whether point `h` of the mirror's plane lies in the triangle: edge functions in f64,
+    /// a point on an edge belongs to the triangle whose edge runs in the positive
+    /// direction (first non-zero coordinate), so each point of an edge two consistently
+    /// wound mirror triangles share counts once (the regular grids of receivers and
+    /// source points put many of them exactly on a quad's diagonal).
+    fn contains(&self, h: Vec3) -> bool {
+        let d = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
+        let a = self.p0;
+        let (b, c) = (a + self.e1, a + self.e2);
+        let n = d(self.n);
+        let hp = d(h);
+        for (p, q) in [(a, b), (b, c), (c, a)] {
+            let (p, q) = (d(p), d(q));
+            let e = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+            let r = [hp[0] - p[0], hp[1] - p[1], hp[2] - p[2]];
+            let w = (e[1] * r[2] - e[2] * r[1]) * n[0]
+                + (e[2] * r[0] - e[0] * r[2]) * n[1]
+                + (e[0] * r[1] - e[1] * r[0]) * n[2];
+            let owner = e.iter().find(|&&x| x != 0.0).is_some_and(|&x| x > 0.0);
+            if w < 0.0 || (w == 0.0 && !owner) {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+/// F(x -> A_s through mirror m), split by the receiver's side, and the shadow rays cast:
+/// the source's mirror image y' = y - 2 ((y - p0).n) n, each source point seen from x
+/// through the mirror triangle (the point h where x -> y' crosses its plane lies in it),
+/// with the image's normal, the same disc kernel as `point_to_element`, and visibility on
+/// both legs, x -> h and h -> y (Wallace, Cohen and Greenberg's mirror form factors for a
+/// planar specular reflector, first order). The reflectance is applied by the caller.
+pub fn mirror_factor(
+    bvh: &Bvh,
+    x: Vec3,
+    n_x: Vec3,
+    src: &Element,
+    src_n: Vec3,
+    m: &MirrorTri,
+    pattern: &[(f32, f32)],
+) -> ([f32; 2], u32) {
+    let mut f = [0.0f32; 2];
+    let mut rays = 0;
+    let dx = (x - m.p0).dot(m.n);
+    if dx == 0.0 {
+        return (f, 0);
+    }
+    let img_n = src_n - m.n * (2.0 * src_n.dot(m.n));
+    let da = src.area / pattern.len() as f32;
+    for &(a, b) in pattern {
+        let y = src.p0 + src.e1 * a + src.e2 * b;
+        let dy = (y - m.p0).dot(m.n);
+        // the source and the receiver on the same, reflecting side of the plane
+        if dy * dx <= 0.0 {
+            continue;
+        }
+        let y_img = y - m.n * (2.0 * dy);
+        let d = x - y_img; // from the image to the receiver
+        let r2 = d.length_squared();
+        if r2 <= 0.0 {
+            continue;
+        }
+        let r = r2.sqrt();
+        let cos_y = img_n.dot(d) / r;
+        let cos_x = n_x.dot(d) / r;
+        if cos_y <= 0.0 || cos_x == 0.0 {
+            continue;
+        }
+        // where x -> y' crosses the mirror's plane, inside the triangle?
+        let h = x + (y_img - x) * (dx / (dx + dy));
+        if !m.contains(h) {
+            continue;
+        }
+        let side = if cos_x < 0.0 { 0 } else { 1 };
+        let o = offset_origin(x, n_x, h - x);
+        rays += 2;
+        if bvh.occluded(&Ray::new(o, h - o), 1.0 - 1e-3) {
+            continue;
+        }
+        let nh = if dx > 0.0 { m.n } else { -m.n };
+        let oh = offset_origin(h, nh, y - h);
+        if bvh.occluded(&Ray::new(oh, y - oh), 1.0 - 1e-4) {
+            continue;
+        }
+        f[side] += cos_y * cos_x.abs() * da / (std::f32::consts::PI * r2 + da);
+    }
+    (f, rays)
+}
+
 /// Near pairs: Lambert's exact factor per receiver side, times the visible share.
 fn near_factor(
     bvh: &Bvh,
@@ -258,6 +362,8 @@ pub struct Shooter<'a> {
     /// per patch and band the radiosity received from those shots: the direct light.
     pub de: Vec<f64>,
     pub direct: Vec<f64>,
+    /// The scene's planar mirrors: emission shots also go through them.
+    pub mirrors: Vec<MirrorTri>,
     pub patterns: Patterns,
     pub emitted_power: f64,
     pub shots: u64,
@@ -369,6 +475,47 @@ impl Shooter<'_> {
                     self.b[q + k] += d;
                     self.db[q + k] += d;
                     self.direct[q + k] += rho[j * nb + k] * shot_e[k] * fs as f64;
+                }
+            }
+        }
+        // Emission also reaches receivers through the mirrors (light -> mirror ->
+        // receiver, first order): the caustics the mirrors throw, which the diffuse
+        // transport above cannot carry. It is not direct light for next-event estimation
+        // (`direct`): a path gets it through its BSDF-sampled continuation.
+        if !self.mirrors.is_empty() && shot_e.iter().any(|&e| e > 0.0) {
+            let mirrors = &self.mirrors;
+            let via: Vec<(Vec<f64>, u64)> = self
+                .elems
+                .par_iter()
+                .enumerate()
+                .with_min_len(64)
+                .map(|(j, e)| {
+                    let mut g = vec![0.0f64; 2 * nb];
+                    if j == si || rho[j * nb..(j + 1) * nb].iter().all(|&r| r <= 0.0) {
+                        return (g, 0);
+                    }
+                    let mut rays = 0u64;
+                    for m in mirrors {
+                        let (fm, r) = mirror_factor(bvh, e.c, e.n, &src, src_n, m, &pat.far);
+                        rays += r as u64;
+                        for (side, &fs) in fm.iter().enumerate() {
+                            for k in 0..nb {
+                                g[side * nb + k] += fs as f64 * m.ks[k];
+                            }
+                        }
+                    }
+                    (g, rays)
+                })
+                .collect();
+            for (j, (g, rays)) in via.iter().enumerate() {
+                self.rays += rays;
+                for side in 0..2 {
+                    let q = (2 * j + side) * nb;
+                    for k in 0..nb {
+                        let d = rho[j * nb + k] * shot_e[k] * g[side * nb + k];
+                        self.b[q + k] += d;
+                        self.db[q + k] += d;
+                    }
                 }
             }
         }
