@@ -339,10 +339,7 @@ fn random_walk<const N: usize>(
             break;
         };
         let mat = scene.material_of(hit.prim);
-        let mut bsdf = mat.bsdf;
-        if let Some(t) = mat.kd_texture {
-            bsdf = bsdf.with_kd(scene.textures[t as usize].lookup(hit.uv.x, hit.uv.y));
-        }
+        let bsdf = scene.bsdf_at(mat, &hit);
         let prev = *path.last().unwrap();
         let mut v = Vertex {
             kind: Kind::Surface,

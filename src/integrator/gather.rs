@@ -55,13 +55,13 @@
 //! at the first non-specular hit, mirrors and glass followed.
 
 use super::camera_ray;
-use super::path::{DIMS_CAMERA, DIMS_PER_BOUNCE};
+use super::path::{emission, DIMS_CAMERA, DIMS_PER_BOUNCE};
 use super::rr::{LTilde, Selection, Step};
 use super::{Counters, IntegratorSettings};
 use crate::material::Bsdf;
 use crate::math::{offset_origin, Frame, Ray, Vec3};
 use crate::radiosity::Solution;
-use crate::sampling::{power_heuristic, SampleStream};
+use crate::sampling::SampleStream;
 use crate::scene::Scene;
 use crate::spectrum::Spectrum;
 use glam::Vec2;
@@ -139,24 +139,11 @@ pub fn radiance<const N: usize>(
         let front = wo.dot(hit.ng) > 0.0;
 
         // Emission, MIS-weighted against NEE, for the traced and the waiting parts.
-        if mat.is_emissive() && front {
-            let cos_o = wo.dot(hit.ng);
-            let le = Spectrum::<N>::from_rgb(mat.emitted(cos_o));
-            let w = if prev_delta {
-                1.0
-            } else {
-                let li = scene.lights.light_of(hit.prim).unwrap_or(0);
-                let pdf_light = scene.lights.pdf_position(li) * hit.t * hit.t / cos_o;
-                power_heuristic(prev_pdf, pdf_light)
-            };
+        if let Some((le, w)) = emission::<N>(scene, mat, &hit, wo, prev_pdf, prev_delta) {
             l += (beta + beta_d) * le * w;
         }
 
-        let mut bsdf = mat.bsdf;
-        if let Some(t) = mat.kd_texture {
-            let kd = scene.textures[t as usize].lookup(hit.uv.x, hit.uv.y);
-            bsdf = bsdf.with_kd(kd);
-        }
+        let bsdf = scene.bsdf_at(mat, &hit);
 
         // The waiting diffuse part: (B - E)/pi at the first diffuse-like hit.
         if !beta_d.is_black() && !bsdf.is_delta() {
@@ -354,23 +341,11 @@ fn incident<const N: usize>(
         let wo = -ray.d;
         let front = wo.dot(hit.ng) > 0.0;
         let mut le = Spectrum::<N>::ZERO;
-        if mat.is_emissive() && front {
-            let cos_o = wo.dot(hit.ng);
-            le = Spectrum::<N>::from_rgb(mat.emitted(cos_o));
-            let w = if prev_delta {
-                1.0
-            } else {
-                let li = scene.lights.light_of(hit.prim).unwrap_or(0);
-                let pdf_light = scene.lights.pdf_position(li) * hit.t * hit.t / cos_o;
-                power_heuristic(pdf_x, pdf_light)
-            };
+        if let Some((e, w)) = emission::<N>(scene, mat, &hit, wo, pdf_x, prev_delta) {
+            le = e;
             l += thr * le * w;
         }
-        let mut bsdf = mat.bsdf;
-        if let Some(t) = mat.kd_texture {
-            let kd = scene.textures[t as usize].lookup(hit.uv.x, hit.uv.y);
-            bsdf = bsdf.with_kd(kd);
-        }
+        let bsdf = scene.bsdf_at(mat, &hit);
         if !bsdf.is_delta() {
             if segments < max_segments {
                 if sol.covers(hit.prim) && has_diffuse(&bsdf) {
@@ -547,6 +522,29 @@ mod tests {
         px
     }
 
+    /// One gather sample along `ray` (no roulette estimate), linear RGB.
+    fn gather_rgb(
+        scene: &Scene,
+        sol: &Solution,
+        ray: Ray,
+        s: &mut SampleStream,
+        set: &IntegratorSettings,
+        depth: u32,
+        c: &mut Counters,
+    ) -> [f32; 3] {
+        radiance::<3>(
+            scene,
+            sol,
+            ray,
+            s,
+            set,
+            depth,
+            &LTilde::Scene(Spectrum::ZERO),
+            c,
+        )
+        .to_rgb()
+    }
+
     /// Image mean per channel and its standard error (pixels independent).
     fn mean_se(px: &[PixelStats]) -> ([f64; 3], [f64; 3]) {
         let n = px.len() as f64;
@@ -580,17 +578,7 @@ mod tests {
                 ..Default::default()
             };
             let px = render(&scene, 16, 16, 64, &|ray, s, c| {
-                radiance::<3>(
-                    &scene,
-                    &sol,
-                    ray,
-                    s,
-                    &set,
-                    depth,
-                    &LTilde::Scene(Spectrum::ZERO),
-                    c,
-                )
-                .to_rgb()
+                gather_rgb(&scene, &sol, ray, s, &set, depth, c)
             });
             let (m, se) = mean_se(&px);
             println!("gather depth {depth}, {rays} rays: mean {m:?} se {se:?}");
@@ -662,17 +650,7 @@ mod tests {
                     ..Default::default()
                 };
                 let px = render(&scene, 16, 16, 96, &|ray, s, c| {
-                    radiance::<3>(
-                        &scene,
-                        &sol,
-                        ray,
-                        s,
-                        &set,
-                        1,
-                        &LTilde::Scene(Spectrum::ZERO),
-                        c,
-                    )
-                    .to_rgb()
+                    gather_rgb(&scene, &sol, ray, s, &set, 1, c)
                 });
                 block_means(&px, 16)
             };
@@ -723,17 +701,7 @@ mod tests {
                 ..Default::default()
             };
             let g = render(&scene, 24, 24, 64, &|ray, s, c| {
-                radiance::<3>(
-                    &scene,
-                    &sol,
-                    ray,
-                    s,
-                    &set,
-                    1,
-                    &LTilde::Scene(Spectrum::ZERO),
-                    c,
-                )
-                .to_rgb()
+                gather_rgb(&scene, &sol, ray, s, &set, 1, c)
             });
             let (mg, sg) = mean_se(&g);
             println!("cornell gather ({rays} rays) {mg:?} se {sg:?}; path {mp:?} se {sp:?}");

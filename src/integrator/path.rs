@@ -56,16 +56,7 @@ pub fn radiance<const N: usize>(
         let wo = -ray.d;
 
         // Emission (one-sided: the counter-clockwise side), MIS-weighted against NEE.
-        if mat.is_emissive() && wo.dot(hit.ng) > 0.0 {
-            let cos_o = wo.dot(hit.ng);
-            let le = Spectrum::<N>::from_rgb(mat.emitted(cos_o));
-            let w = if prev_delta {
-                1.0
-            } else {
-                let li = scene.lights.light_of(hit.prim).unwrap_or(0);
-                let pdf_light = scene.lights.pdf_position(li) * hit.t * hit.t / cos_o;
-                power_heuristic(prev_pdf, pdf_light)
-            };
+        if let Some((le, w)) = emission::<N>(scene, mat, &hit, wo, prev_pdf, prev_delta) {
             l += beta * le * w;
         }
         if segments >= max_segments {
@@ -73,11 +64,7 @@ pub fn radiance<const N: usize>(
         }
 
         // The BSDF at the hit, textured, in a frame facing wo for two-sided materials.
-        let mut bsdf = mat.bsdf;
-        if let Some(t) = mat.kd_texture {
-            let kd = scene.textures[t as usize].lookup(hit.uv.x, hit.uv.y);
-            bsdf = bsdf.with_kd(kd);
-        }
+        let bsdf = scene.bsdf_at(mat, &hit);
         let (ng, ns) = if bsdf.is_two_sided() && wo.dot(hit.ng) < 0.0 {
             (-hit.ng, -hit.ns)
         } else {
@@ -170,6 +157,33 @@ pub fn escaped<const N: usize>(
 /// Next-event estimation at a non-delta vertex: a point sampled on the lights, its
 /// visibility, MIS-weighted (power heuristic) against the roulette's selection density.
 /// Returns beta f Le w / p_light (zero if the point is not seen). Shared by the path
+
+/// The emission a segment reaches at `hit` (the front of an emitter seen along -`wo`) and
+/// its MIS weight against NEE at the previous vertex: 1 after a delta bounce (and from the
+/// camera), else the power heuristic of the BSDF density `prev_pdf` against the light's.
+#[inline]
+pub fn emission<const N: usize>(
+    scene: &Scene,
+    mat: &crate::material::Material,
+    hit: &crate::scene::SurfaceHit,
+    wo: crate::math::Vec3,
+    prev_pdf: f32,
+    prev_delta: bool,
+) -> Option<(Spectrum<N>, f32)> {
+    let cos_o = wo.dot(hit.ng);
+    if !(mat.is_emissive() && cos_o > 0.0) {
+        return None;
+    }
+    let le = Spectrum::<N>::from_rgb(mat.emitted(cos_o));
+    let w = if prev_delta {
+        1.0
+    } else {
+        let li = scene.lights.light_of(hit.prim).unwrap_or(0);
+        let pdf_light = scene.lights.pdf_position(li) * hit.t * hit.t / cos_o;
+        power_heuristic(prev_pdf, pdf_light)
+    };
+    Some((le, w))
+}
 /// tracer and the radiosity gather.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]

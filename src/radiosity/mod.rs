@@ -422,17 +422,26 @@ impl Solution {
         })
     }
 
+    /// The meshing of triangle `prim` and, for its point `p`, the element (cell index
+    /// within the triangle) and its three grid corners with their weights. None if the
+    /// triangle is not meshed.
+    #[inline]
+    fn locate(&self, prim: u32, p: Vec3) -> Option<(&mesh::TriMesh, u32, [(u32, u32, f32); 3])> {
+        let tm = self.mesh.tris.get(prim as usize)?.as_ref()?;
+        let (b1, b2) = mesh::barycentrics(tm.v0, tm.e1, tm.e2, p);
+        let (cell, corners) = mesh::locate(tm.level, b1, b2);
+        Some((tm, cell, corners))
+    }
+
     /// Interpolated B (per band, into `out`) at point `p` of scene triangle `prim`, on
     /// the front (`front`: the side its winding faces) or back side. False if the
     /// triangle is not meshed (mirror, glass, black).
     #[inline]
     pub fn radiosity_into(&self, prim: u32, p: Vec3, front: bool, out: &mut [f32]) -> bool {
-        let Some(Some(tm)) = self.mesh.tris.get(prim as usize) else {
+        let Some((tm, _, corners)) = self.locate(prim, p) else {
             return false;
         };
         let nb = self.bands;
-        let (b1, b2) = mesh::barycentrics(tm.v0, tm.e1, tm.e2, p);
-        let (_, corners) = mesh::locate(tm.level, b1, b2);
         let n = 1u32 << tm.level;
         let side = if front { 0 } else { 1 };
         for o in out.iter_mut() {
@@ -491,11 +500,7 @@ impl Solution {
         front: bool,
     ) -> Option<Spectrum<N>> {
         debug_assert_eq!(N, self.bands);
-        let Some(Some(tm)) = self.mesh.tris.get(prim as usize) else {
-            return None;
-        };
-        let (b1, b2) = mesh::barycentrics(tm.v0, tm.e1, tm.e2, p);
-        let (cell, _) = mesh::locate(tm.level, b1, b2);
+        let (tm, cell, _) = self.locate(prim, p)?;
         let side = if front { 0 } else { 1 };
         let q = (2 * (tm.first_elem + cell) as usize + side) * N;
         let mut s = [0.0f32; N];

@@ -409,6 +409,17 @@ impl Scene {
     pub fn material_of(&self, prim: u32) -> &Material {
         &self.materials[self.tri_material[prim as usize] as usize]
     }
+
+    /// The BSDF of material `mat` at a hit: its Kd from its texture at `hit`'s uv.
+    #[inline]
+    pub fn bsdf_at(&self, mat: &Material, hit: &SurfaceHit) -> crate::material::Bsdf {
+        match mat.kd_texture {
+            Some(t) => mat
+                .bsdf
+                .with_kd(self.textures[t as usize].lookup(hit.uv.x, hit.uv.y)),
+            None => mat.bsdf,
+        }
+    }
 }
 
 /// The BSDF of a Mitsuba surface model; `kd` is the diffuse reflectance (plastic's base).
