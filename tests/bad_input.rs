@@ -221,6 +221,33 @@ fn bad_options_give_one_line_errors_naming_the_option() {
             &["out.tga"][..],
         ),
         ("exposure nan", &["--exposure", "nan"], &["--exposure"]),
+        (
+            "gather rays 0",
+            &["--gather", "radiosity", "--gather-rays", "0"],
+            &["--gather-rays 0"],
+        ),
+        (
+            "gather rays too many",
+            &["--gather", "radiosity", "--gather-rays", "5000"],
+            &["--gather-rays 5000"],
+        ),
+        (
+            "radiosity L~ without the estimate roulette",
+            &["--rr-estimate", "radiosity"],
+            &["--rr-estimate radiosity", "--rr classic"],
+        ),
+        (
+            "radiosity L~ under bdpt",
+            &[
+                "--rr",
+                "estimate",
+                "--rr-estimate",
+                "radiosity",
+                "--integrator",
+                "bdpt",
+            ],
+            &["--rr-estimate radiosity", "bdpt"],
+        ),
     ] {
         let (code, err) = render(&d, "cornell", extra);
         assert_one_line_error(what, code, &err, 1, needles);
@@ -246,6 +273,11 @@ fn bad_options_give_one_line_errors_naming_the_option() {
         ),
         ("time 0", &["--time", "0"], &["--time"]),
         ("sampler", &["--sampler", "halton"], &["--sampler"]),
+        (
+            "rr estimate source",
+            &["--rr-estimate", "photons"],
+            &["--rr-estimate"],
+        ),
     ] {
         let (code, err) = render(&d, "cornell", extra);
         assert_one_line_error(what, code, &err, 2, needles);

@@ -154,10 +154,6 @@ pub fn escaped<const N: usize>(
     le * power_heuristic(prev_pdf, pdf_light)
 }
 
-/// Next-event estimation at a non-delta vertex: a point sampled on the lights, its
-/// visibility, MIS-weighted (power heuristic) against the roulette's selection density.
-/// Returns beta f Le w / p_light (zero if the point is not seen). Shared by the path
-
 /// The emission a segment reaches at `hit` (the front of an emitter seen along -`wo`) and
 /// its MIS weight against NEE at the previous vertex: 1 after a delta bounce (and from the
 /// camera), else the power heuristic of the BSDF density `prev_pdf` against the light's.
@@ -184,6 +180,10 @@ pub fn emission<const N: usize>(
     };
     Some((le, w))
 }
+
+/// Next-event estimation at a non-delta vertex: a point sampled on the lights, its
+/// visibility, MIS-weighted (power heuristic) against the roulette's selection density.
+/// Returns beta f Le w / p_light (zero if the point is not seen). Shared by the path
 /// tracer and the radiosity gather.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]

@@ -35,6 +35,10 @@ use crate::spectrum::Spectrum;
 use mesh::Mesh;
 use std::time::Instant;
 
+/// A point found in the mesh: its triangle's meshing, its element's cell index there and
+/// the element's three grid corners with their interpolation weights.
+type Located<'a> = (&'a mesh::TriMesh, u32, [(u32, u32, f32); 3]);
+
 /// Largest mesh kalos agrees to allocate (element and vertex arrays together).
 pub const MAX_MESH_BYTES: u64 = 4 << 30;
 
@@ -426,7 +430,7 @@ impl Solution {
     /// within the triangle) and its three grid corners with their weights. None if the
     /// triangle is not meshed.
     #[inline]
-    fn locate(&self, prim: u32, p: Vec3) -> Option<(&mesh::TriMesh, u32, [(u32, u32, f32); 3])> {
+    fn locate(&self, prim: u32, p: Vec3) -> Option<Located<'_>> {
         let tm = self.mesh.tris.get(prim as usize)?.as_ref()?;
         let (b1, b2) = mesh::barycentrics(tm.v0, tm.e1, tm.e2, p);
         let (cell, corners) = mesh::locate(tm.level, b1, b2);
