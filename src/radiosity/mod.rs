@@ -307,6 +307,7 @@ impl Solution {
             rays: 0,
             rows: vec![None; 2 * ne],
             row_bytes: 0,
+            unshot_power: Vec::new(),
         };
 
         // --- shoot until the unshot power is below tolerance x emitted

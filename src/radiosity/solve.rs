@@ -376,8 +376,12 @@ pub struct Shooter<'a> {
     /// element j, both receiving sides, and the row's normalisation): a patch shot again
     /// (it keeps receiving while others shoot) reuses its row instead of casting its rays
     /// again. Rows are kept while they fit in ROW_CACHE_BYTES.
-    pub rows: Vec<Option<(Vec<[f32; 2]>, f64)>>,
+    /// Rows are sparse: (element j, [F to its two sides]) where either is positive.
+    pub rows: Vec<Option<(Vec<(u32, [f32; 2])>, f64)>>,
     pub row_bytes: usize,
+    /// Unshot power per patch (`unshot`), kept up to date by `shoot` so that choosing the
+    /// next shooter is one scan of a flat array (empty until `most_unshot` first fills it).
+    pub unshot_power: Vec<f64>,
 }
 
 /// Memory the cached form-factor rows may take.
@@ -393,11 +397,14 @@ impl Shooter<'_> {
     }
 
     /// The patch with the most unshot power (lowest index on ties) and the total.
-    pub fn most_unshot(&self) -> (usize, f64) {
+    pub fn most_unshot(&mut self) -> (usize, f64) {
+        let np = self.elems.len() * 2;
+        if self.unshot_power.len() != np {
+            self.unshot_power = (0..np).map(|p| self.unshot(p)).collect();
+        }
         let mut best = (0usize, -1.0f64);
         let mut total = 0.0;
-        for p in 0..self.elems.len() * 2 {
-            let u = self.unshot(p);
+        for (p, &u) in self.unshot_power.iter().enumerate() {
             total += u;
             if u > best.1 {
                 best = (p, u);
@@ -451,7 +458,13 @@ impl Shooter<'_> {
                 } else {
                     1.0
                 };
-                (ff.into_iter().map(|(f, _)| f).collect::<Vec<_>>(), norm)
+                let sparse: Vec<(u32, [f32; 2])> = ff
+                    .into_iter()
+                    .enumerate()
+                    .filter(|(_, (f, _))| f[0] > 0.0 || f[1] > 0.0)
+                    .map(|(j, (f, _))| (j as u32, f))
+                    .collect();
+                (sparse, norm)
             }
         };
         let shot: Vec<f64> = self.db[p * nb..(p + 1) * nb]
@@ -468,7 +481,14 @@ impl Shooter<'_> {
         for e in &mut self.de[p * nb..(p + 1) * nb] {
             *e = 0.0;
         }
-        for (j, f) in ff.iter().enumerate() {
+        let tracked = !self.unshot_power.is_empty();
+        if tracked {
+            self.unshot_power[p] = self.unshot(p);
+        }
+        // only the emitters' first shots carry direct light
+        let emits = shot_e.iter().any(|&e| e != 0.0);
+        for &(j, ref f) in ff.iter() {
+            let j = j as usize;
             for (side, &fs) in f.iter().enumerate() {
                 if fs <= 0.0 {
                     continue;
@@ -478,7 +498,14 @@ impl Shooter<'_> {
                     let d = rho[j * nb + k] * shot[k] * fs as f64;
                     self.b[q + k] += d;
                     self.db[q + k] += d;
-                    self.direct[q + k] += rho[j * nb + k] * shot_e[k] * fs as f64;
+                }
+                if emits {
+                    for k in 0..nb {
+                        self.direct[q + k] += rho[j * nb + k] * shot_e[k] * fs as f64;
+                    }
+                }
+                if tracked {
+                    self.unshot_power[2 * j + side] = self.unshot(2 * j + side);
                 }
             }
         }
@@ -520,11 +547,14 @@ impl Shooter<'_> {
                         self.b[q + k] += d;
                         self.db[q + k] += d;
                     }
+                    if tracked {
+                        self.unshot_power[2 * j + side] = self.unshot(2 * j + side);
+                    }
                 }
             }
         }
         self.shots += 1;
-        let bytes = ff.len() * std::mem::size_of::<[f32; 2]>();
+        let bytes = ff.len() * std::mem::size_of::<(u32, [f32; 2])>();
         if was_cached {
             self.rows[p] = Some((ff, norm));
         } else if p < self.rows.len() && self.row_bytes + bytes <= ROW_CACHE_BYTES {
