@@ -377,12 +377,15 @@ pub struct Shooter<'a> {
     /// (it keeps receiving while others shoot) reuses its row instead of casting its rays
     /// again. Rows are kept while they fit in ROW_CACHE_BYTES.
     /// Rows are sparse: (element j, [F to its two sides]) where either is positive.
-    pub rows: Vec<Option<(Vec<(u32, [f32; 2])>, f64)>>,
+    pub rows: Vec<Option<(SparseRow, f64)>>,
     pub row_bytes: usize,
     /// Unshot power per patch (`unshot`), kept up to date by `shoot` so that choosing the
     /// next shooter is one scan of a flat array (empty until `most_unshot` first fills it).
     pub unshot_power: Vec<f64>,
 }
+
+/// A form-factor row: (element j, [F to its two sides]) where either is positive.
+pub type SparseRow = Vec<(u32, [f32; 2])>;
 
 /// Memory the cached form-factor rows may take.
 pub const ROW_CACHE_BYTES: usize = 1 << 30;
@@ -458,7 +461,7 @@ impl Shooter<'_> {
                 } else {
                     1.0
                 };
-                let sparse: Vec<(u32, [f32; 2])> = ff
+                let sparse: SparseRow = ff
                     .into_iter()
                     .enumerate()
                     .filter(|(_, (f, _))| f[0] > 0.0 || f[1] > 0.0)
