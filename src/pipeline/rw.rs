@@ -656,8 +656,8 @@ mod tests {
     /// more trials on average). The pixels that need the most are the back wall's top and
     /// the walls above the tall box (`--rw-layers`): median luminance 2.3-2.5x the others',
     /// variance 9-11x, nearly all of it indirect light (direct light alone, `--max-depth
-    /// 2`, under 4%; next-event estimation uniform in the light's solid angle, tried on
-    /// branch `solid-angle`, changed nothing). The absolute test needs (t S_p / (D
+    /// 2`, under 4%; next-event estimation uniform in the light's solid angle, tried
+    /// and not kept, changed nothing). The absolute test needs (t S_p / (D
     /// Lt_vis))^2 trials, more than 4 Mt wherever S_p is over twice the pilot's mean S:
     /// the paper's 4 Mt alone does not cover cornell's brightness range.
     fn converged_share(job: RenderJob) -> f64 {
