@@ -384,6 +384,65 @@ pub struct Shooter<'a> {
     pub unshot_power: Vec<f64>,
 }
 
+/// Unshot power of a patch from its dB per band and its area.
+#[inline]
+fn unshot_of(db: &[f64], area: f32) -> f64 {
+    let s: f64 = db.iter().sum();
+    s / db.len() as f64 * area as f64
+}
+
+/// Receivers per parallel task of a shot's update.
+const UPDATE_CHUNK: usize = 512;
+
+/// What one shot passes on: rho_j dB_s F_sj to each receiver patch of its row.
+struct Shot<'a> {
+    rho: &'a [f64],
+    elems: &'a [Element],
+    /// The shooter's dB and its emission part, per band (normalised).
+    shot: &'a [f64],
+    shot_e: &'a [f64],
+    emits: bool,
+    nb: usize,
+}
+
+impl Shot<'_> {
+    /// Apply the row entries `row` (elements from `j0` on) to the per-patch slices that
+    /// start at element `j0`.
+    fn apply(
+        &self,
+        row: &[(u32, [f32; 2])],
+        j0: usize,
+        b: &mut [f64],
+        db: &mut [f64],
+        direct: &mut [f64],
+        unshot: &mut [f64],
+    ) {
+        let nb = self.nb;
+        for &(j, ref f) in row {
+            let j = j as usize;
+            let rho = &self.rho[j * nb..(j + 1) * nb];
+            for (side, &fs) in f.iter().enumerate() {
+                if fs <= 0.0 {
+                    continue;
+                }
+                let pl = 2 * (j - j0) + side;
+                let q = pl * nb;
+                for k in 0..nb {
+                    let d = rho[k] * self.shot[k] * fs as f64;
+                    b[q + k] += d;
+                    db[q + k] += d;
+                }
+                if self.emits {
+                    for k in 0..nb {
+                        direct[q + k] += rho[k] * self.shot_e[k] * fs as f64;
+                    }
+                }
+                unshot[pl] = unshot_of(&db[q..q + nb], self.elems[j].area);
+            }
+        }
+    }
+}
+
 /// A form-factor row: (element j, [F to its two sides]) where either is positive.
 pub type SparseRow = Vec<(u32, [f32; 2])>;
 
@@ -395,16 +454,20 @@ impl Shooter<'_> {
     #[inline]
     fn unshot(&self, p: usize) -> f64 {
         let nb = self.bands;
-        let s: f64 = self.db[p * nb..(p + 1) * nb].iter().sum();
-        s / nb as f64 * self.elems[p / 2].area as f64
+        unshot_of(&self.db[p * nb..(p + 1) * nb], self.elems[p / 2].area)
     }
 
-    /// The patch with the most unshot power (lowest index on ties) and the total.
-    pub fn most_unshot(&mut self) -> (usize, f64) {
+    /// Fill `unshot_power` if it is not yet.
+    fn track_unshot(&mut self) {
         let np = self.elems.len() * 2;
         if self.unshot_power.len() != np {
             self.unshot_power = (0..np).map(|p| self.unshot(p)).collect();
         }
+    }
+
+    /// The patch with the most unshot power (lowest index on ties) and the total.
+    pub fn most_unshot(&mut self) -> (usize, f64) {
+        self.track_unshot();
         let mut best = (0usize, -1.0f64);
         let mut total = 0.0;
         for (p, &u) in self.unshot_power.iter().enumerate() {
@@ -418,6 +481,7 @@ impl Shooter<'_> {
 
     /// Shoot patch `p`'s unshot radiosity to every element.
     pub fn shoot(&mut self, p: usize) {
+        self.track_unshot();
         let nb = self.bands;
         let si = p / 2;
         let src = self.elems[si];
@@ -484,33 +548,41 @@ impl Shooter<'_> {
         for e in &mut self.de[p * nb..(p + 1) * nb] {
             *e = 0.0;
         }
-        let tracked = !self.unshot_power.is_empty();
-        if tracked {
-            self.unshot_power[p] = self.unshot(p);
-        }
-        // only the emitters' first shots carry direct light
-        let emits = shot_e.iter().any(|&e| e != 0.0);
-        for &(j, ref f) in ff.iter() {
-            let j = j as usize;
-            for (side, &fs) in f.iter().enumerate() {
-                if fs <= 0.0 {
-                    continue;
-                }
-                let q = (2 * j + side) * nb;
-                for k in 0..nb {
-                    let d = rho[j * nb + k] * shot[k] * fs as f64;
-                    self.b[q + k] += d;
-                    self.db[q + k] += d;
-                }
-                if emits {
-                    for k in 0..nb {
-                        self.direct[q + k] += rho[j * nb + k] * shot_e[k] * fs as f64;
-                    }
-                }
-                if tracked {
-                    self.unshot_power[2 * j + side] = self.unshot(2 * j + side);
-                }
-            }
+        self.unshot_power[p] = self.unshot(p);
+        // The receivers' updates, each independent of the others: in parallel over ranges
+        // of UPDATE_CHUNK elements (the same bits as one loop).
+        let shot = Shot {
+            rho,
+            elems: self.elems,
+            shot: &shot,
+            shot_e: &shot_e,
+            // only the emitters' first shots carry direct light
+            emits: shot_e.iter().any(|&e| e != 0.0),
+            nb,
+        };
+        let ch = UPDATE_CHUNK;
+        if rayon::current_num_threads() > 1 && ff.len() > ch {
+            self.b
+                .par_chunks_mut(2 * nb * ch)
+                .zip(self.db.par_chunks_mut(2 * nb * ch))
+                .zip(self.direct.par_chunks_mut(2 * nb * ch))
+                .zip(self.unshot_power.par_chunks_mut(2 * ch))
+                .enumerate()
+                .for_each(|(c, (((b, db), direct), unshot))| {
+                    let j0 = c * ch;
+                    let lo = ff.partition_point(|e| (e.0 as usize) < j0);
+                    let hi = ff.partition_point(|e| (e.0 as usize) < j0 + ch);
+                    shot.apply(&ff[lo..hi], j0, b, db, direct, unshot);
+                });
+        } else {
+            shot.apply(
+                &ff,
+                0,
+                &mut self.b,
+                &mut self.db,
+                &mut self.direct,
+                &mut self.unshot_power,
+            );
         }
         // Emission also reaches receivers through the mirrors (light -> mirror ->
         // receiver, first order): the caustics the mirrors throw, which the diffuse
@@ -550,9 +622,7 @@ impl Shooter<'_> {
                         self.b[q + k] += d;
                         self.db[q + k] += d;
                     }
-                    if tracked {
-                        self.unshot_power[2 * j + side] = self.unshot(2 * j + side);
-                    }
+                    self.unshot_power[2 * j + side] = self.unshot(2 * j + side);
                 }
             }
         }
