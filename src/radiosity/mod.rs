@@ -18,8 +18,9 @@
 //! scene's planar ideal mirrors (`Bsdf::Mirror` triangles; first order, mirror-image
 //! form factors in `solve`): the caustics the mirrors throw then light the surfaces the
 //! gather looks up (on `rw-room`, without them, every gather image was 0.5% too dark and
-//! the ceiling's top rows by 2.4-3.6%, median signed relative error). Emitters keep their exact emission E = pi L_e (the
-//! cosine-weighted average for directional emission) on their front side.
+//! the ceiling's top rows by 2.4-3.6%, median signed relative error). Emitters keep their
+//! exact emission E = pi L_e (the cosine-weighted average for directional emission) on
+//! their front side.
 
 pub mod mesh;
 pub mod ply;

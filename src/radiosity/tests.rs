@@ -235,7 +235,7 @@ fn cornell_converges() {
 fn solver_identical_on_1_and_3_threads() {
     let scene = crate::scene::load("cornell").unwrap();
     let set = RadiositySettings {
-        max_area: Some(0.05),
+        max_area: Some(0.03),
         tolerance: 1e-2,
         ..Default::default()
     };
@@ -248,6 +248,8 @@ fn solver_identical_on_1_and_3_threads() {
     };
     let a = run(1);
     let b = run(3);
+    // enough elements for the shots' parallel update (several chunks) on 3 threads
+    assert!(a.stats.elements > 2 * super::solve::UPDATE_CHUNK as u64);
     assert_eq!(a.stats.shots, b.stats.shots);
     assert_eq!(a.stats.rays, b.stats.rays);
     assert!(a.stats.shots > 10);
