@@ -26,7 +26,7 @@
 # Environment overrides:
 #   CASES (cornell)  SPP (256; the mesh cases use SPP_MESH, 16)  REPS (3)  THREADS (2: kalos
 #   --threads, and Mitsuba's Dr.Jit thread count when the machine has more cores than that)
-#   VARIANT (llvm_ad_rgb)  MESH (/tmp/kalos-bench-heightfield.obj)
+#   VARIANT (llvm_ad_rgb)  VARIANT_1 (the one-core cases' Mitsuba variant: scalar_rgb)  MESH (/tmp/kalos-bench-heightfield.obj)
 #   MITSUBA_VENV (/tmp/mitsuba)  LIBLLVM_PATH (/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1)
 #   MITSUBA_DIR (/work/shared/bench/mitsuba)  KALOS (target/release/kalos)
 set -euo pipefail
@@ -39,6 +39,7 @@ SPP_MESH=${SPP_MESH:-16}
 REPS=${REPS:-3}
 THREADS=${THREADS:-2}
 VARIANT=${VARIANT:-llvm_ad_rgb}
+VARIANT_1=${VARIANT_1:-scalar_rgb}
 MESH=${MESH:-/tmp/kalos-bench-heightfield.obj}
 MITSUBA_VENV=${MITSUBA_VENV:-/tmp/mitsuba}
 LIBLLVM_PATH=${LIBLLVM_PATH:-/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1}
@@ -167,7 +168,7 @@ for c in $CASES; do
     [[ $c == mesh* ]] && kextra=(--camera "$(IFS=,; echo "${MESH_CAM[*]}")")
     # One core: both pinned to CPU 0 with two threads each (Dr.Jit deadlocks with one), so
     # that on a loaded machine the scheduler gives both the same share of that core.
-    [[ $c == *-1 ]] && threads=2 pin=1 variant=scalar_rgb
+    [[ $c == *-1 ]] && threads=2 pin=1 variant=$VARIANT_1
     [[ $c == cornell-rr ]] && depth=-1 mi_rr=5 k_rr=default
     roulette=off core=""
     if [[ $k_rr != off ]]; then roulette="on (mitsuba rr_depth $mi_rr, kalos default)"; fi

@@ -15,7 +15,7 @@
 //! Env: `NO_OBVHS=1` skips obvhs; `SCENES=mesh` / `SCENES=cornell` runs one
 //! scene (both by default).
 
-use kalos::accel::Bvh;
+use kalos::accel::{Bvh, RayAnswer, RayQuery, BATCH};
 use kalos::math::{Bounds3, Ray, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -249,6 +249,26 @@ fn time_rays(
     rays: &[Ray],
     f: impl Fn(&Ray) -> Option<f32> + Sync,
 ) -> Rate {
+    time_chunks(pool, rays, |c| {
+        let mut hits = 0usize;
+        let mut sum = 0.0f64;
+        for r in c {
+            if let Some(t) = f(r) {
+                hits += 1;
+                sum += t as f64;
+            }
+        }
+        (hits, sum)
+    })
+}
+
+/// Runs `f` over chunks of the rays on the pool (it returns the chunk's hits and
+/// sum of t), best of 3 passes.
+fn time_chunks(
+    pool: &rayon::ThreadPool,
+    rays: &[Ray],
+    f: impl Fn(&[Ray]) -> (usize, f64) + Sync,
+) -> Rate {
     let mut best = Rate {
         wall: 0.0,
         cpu: 0.0,
@@ -261,14 +281,7 @@ fn time_rays(
             rays.par_chunks(4096)
                 .map(|c| {
                     let c0 = thread_cpu_ns();
-                    let mut hits = 0usize;
-                    let mut sum = 0.0f64;
-                    for r in c {
-                        if let Some(t) = f(r) {
-                            hits += 1;
-                            sum += t as f64;
-                        }
-                    }
+                    let (hits, sum) = f(c);
                     (hits, sum, thread_cpu_ns() - c0)
                 })
                 .reduce(|| (0, 0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2))
@@ -312,6 +325,43 @@ fn bench_kalos(name: &str, pool: &rayon::ThreadPool, tris: &[[Vec3; 3]], rays: &
     );
     let r = time_rays(pool, &rays.shadow, |r| bvh.occluded(r, 1.0).then_some(0.0));
     println!("[kalos {name}] any-hit: {r}  (occluded {})", r.hits);
+    // The same rays through `Bvh::trace`, BATCH queries interleaved at a time.
+    let batched = |rays: &[Ray], q: fn(Ray) -> RayQuery| {
+        let mut hits = 0usize;
+        let mut sum = 0.0f64;
+        let mut qs = Vec::with_capacity(BATCH);
+        let mut out = vec![RayAnswer::Occluded(false); BATCH];
+        for b in rays.chunks(BATCH) {
+            qs.clear();
+            qs.extend(b.iter().map(|&r| q(r)));
+            bvh.trace(&qs, &mut out[..b.len()]);
+            for a in &out[..b.len()] {
+                match *a {
+                    RayAnswer::Closest(Some(h)) => {
+                        hits += 1;
+                        sum += h.t as f64;
+                    }
+                    RayAnswer::Occluded(true) => hits += 1,
+                    _ => {}
+                }
+            }
+        }
+        (hits, sum)
+    };
+    let r = time_chunks(pool, &rays.closest, |c| {
+        batched(c, |r| RayQuery::Closest(r, f32::INFINITY))
+    });
+    println!(
+        "[kalos {name}] closest, {BATCH} interleaved: {r}  (hits {}, sum t {:.6e})",
+        r.hits, r.sum_t
+    );
+    let r = time_chunks(pool, &rays.shadow, |c| {
+        batched(c, |r| RayQuery::Occluded(r, 1.0))
+    });
+    println!(
+        "[kalos {name}] any-hit, {BATCH} interleaved: {r}  (occluded {})",
+        r.hits
+    );
 }
 
 fn bench_obvhs(name: &str, pool: &rayon::ThreadPool, tris: &[[Vec3; 3]], rays: &Rays) {

@@ -140,3 +140,42 @@ fn bit_identical_for_every_simd_path() {
         assert!(images[0].1.iter().any(|p| p[0] > 0.0));
     }
 }
+
+/// The path tracer's batched samples (interleaved ray queries, which large scenes use)
+/// give the image of one sample at a time, bit for bit, on every instruction set and any
+/// number of threads, with and without roulette.
+#[test]
+fn bit_identical_batched_or_not() {
+    use kalos::accel::Isa;
+    let mut scene = kalos::scene::load("cornell-glossy").unwrap();
+    for max_depth in [-1, 6] {
+        let mut set = settings(&scene, 24, 20);
+        set.integrator.max_depth = max_depth;
+        let mut images = Vec::new();
+        for isa in Isa::available() {
+            assert!(scene.bvh.set_isa(isa));
+            for (batching, threads) in [(false, 1), (true, 1), (true, 3)] {
+                scene.bvh.set_batching(Some(batching));
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let film = pool.install(|| render_spp(&scene, &set, 8));
+                let img: Vec<_> = film.pixels.iter().map(|p| p.mean()).collect();
+                images.push((
+                    format!("{} batched={batching} threads={threads}", isa.name()),
+                    img,
+                ));
+            }
+        }
+        scene.bvh.set_batching(None);
+        for (what, img) in &images[1..] {
+            assert!(
+                *img == images[0].1,
+                "max_depth {max_depth}: {what} gives another image than {}",
+                images[0].0
+            );
+        }
+        assert!(images[0].1.iter().any(|p| p[0] > 0.0));
+    }
+}

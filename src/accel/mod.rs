@@ -2,12 +2,13 @@
 //!
 //! Build: binned SAH (16 bins, all three axes, costs counted in 4-triangle
 //! blocks) into a flattened BVH2 of 32-byte nodes, subtrees built in parallel
-//! with rayon; the BVH2 is then collapsed into a 4-wide BVH (`Node4`, 128
+//! with rayon; the BVH2 is then collapsed into an 8-wide BVH (`Node8`, 256
 //! bytes: SoA child boxes + child references) whose leaves are single packets
 //! of up to four triangles in SoA Möller–Trumbore form (`Tri4`, v0/e1/e2).
 //!
-//! Traversal: one ray at a time, 4 boxes per SIMD slab test and 4 triangles
-//! per SIMD triangle test (glam `Vec4`: SSE2 on x86-64, NEON on aarch64), no
+//! Traversal: one ray at a time, the 8 boxes of a node per slab test (one
+//! AVX2 test, or two 4-wide glam `Vec4` ones: SSE2 on x86-64, NEON on
+//! aarch64) and 4 triangles per SIMD triangle test, no
 //! heap allocation, a fixed-size uninitialised stack sized from the tree at
 //! build time, and children visited nearest-first for closest-hit queries.
 //! The slab test reads each axis' near and far planes by the ray's octant
@@ -290,20 +291,24 @@ impl Tri4 {
     }
 }
 
-/// Four-wide BVH node (128 bytes, one per two cache lines): the boxes of up
-/// to four children in SoA form, lanes = children, and their references.
+/// Children per BVH node.
+const WIDTH: usize = 8;
+
+/// Eight-wide BVH node (256 bytes, four cache lines): the boxes of up to
+/// eight children in SoA form, lanes = children, and their references. One
+/// AVX2 slab test covers the eight boxes (two SSE ones on the baseline).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-struct Node4 {
-    /// min.x, min.y, min.z, max.x, max.y, max.z of the four children.
-    b: [Vec4; 6],
+struct Node8 {
+    /// min.x, min.y, min.z, max.x, max.y, max.z of the eight children.
+    b: [[f32; WIDTH]; 6],
     /// Child references (see [`LEAF`]); unused slots have empty boxes.
-    child: [u32; 4],
+    child: [u32; WIDTH],
 }
 
 /// Child reference flag: a leaf, encoded as `LEAF | packet << 2 | (count - 1)`
 /// (its triangles are the first `count` lanes of `Tri4` packet `packet`).
-/// Otherwise a `Node4` index.
+/// Otherwise a `Node8` index.
 const LEAF: u32 = 1 << 31;
 const _: () = assert!(build::MAX_LEAF <= 4);
 
@@ -322,8 +327,8 @@ fn leaf_packet(r: u32) -> (usize, u32) {
 /// Bounding volume hierarchy over a triangle soup.
 #[derive(Clone, Debug)]
 pub struct Bvh {
-    nodes: Vec<Node4>,
-    /// Reference to the root (a `Node4` index or a leaf); unused if empty.
+    nodes: Vec<Node8>,
+    /// Reference to the root (a `Node8` index or a leaf); unused if empty.
     root: u32,
     bounds: Bounds3,
     /// Traversal stack entries a query may need (computed at build time).
@@ -335,15 +340,20 @@ pub struct Bvh {
     prim_ids: Vec<u32>,
     /// Instruction set the queries run with.
     isa: Isa,
+    /// [`Bvh::prefers_batches`] forced (tests, benchmarks); `None`: by size.
+    batching: Option<bool>,
 }
 
 /// Slack on the far slab distance that makes the box test conservative
 /// despite rounding (1 + 2γ₃, Ize 2013).
 const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
-/// Per-ray precomputation for the 4-wide slab test.
+/// Per-ray precomputation for the slab and triangle tests.
 #[derive(Clone, Copy)]
 struct RayData {
+    /// Origin and (fixed) reciprocal direction, for the 8-wide AVX2 slab test.
+    o: Vec3,
+    inv: Vec3,
     ox: Vec4,
     oy: Vec4,
     oz: Vec4,
@@ -353,7 +363,7 @@ struct RayData {
     ix: Vec4,
     iy: Vec4,
     iz: Vec4,
-    /// Octant: index into `Node4::b` of the near plane per axis (0..3 for
+    /// Octant: index into `Node8::b` of the near plane per axis (0..3 for
     /// the min planes when the direction is positive, 3..6 for the max
     /// planes when it is negative), and of the far plane.
     near: [usize; 3],
@@ -375,6 +385,8 @@ impl RayData {
         };
         let inv = Vec3::new(fix(inv.x), fix(inv.y), fix(inv.z));
         RayData {
+            o: ray.o,
+            inv,
             ox: Vec4::splat(ray.o.x),
             oy: Vec4::splat(ray.o.y),
             oz: Vec4::splat(ray.o.z),
@@ -397,8 +409,27 @@ impl RayData {
         }
     }
 
-    /// Entry distances of the four child boxes and the mask (bit i = lane i)
-    /// of those the ray overlaps within `(0, t_max)`.
+    /// Entry distances of the eight child boxes and the mask (bit i = lane i)
+    /// of those the ray overlaps within `(0, t_max)`: one AVX2 test when
+    /// `AVX`, else two 4-wide SSE ones. Both do the same IEEE operations in the
+    /// same order, so they agree bit for bit.
+    #[inline(always)]
+    fn slab8<const AVX: bool>(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // SAFETY: `AVX` is only instantiated by the `*_avx2` queries, which
+            // run only where the CPU has AVX2 and FMA.
+            return unsafe { self.slab8_avx2(n, t_max) };
+        }
+        let (t0, m0) = self.slab4(n, 0, t_max);
+        let (t1, m1) = self.slab4(n, 4, t_max);
+        let mut tn = [0.0; WIDTH];
+        tn[..4].copy_from_slice(&t0.to_array());
+        tn[4..].copy_from_slice(&t1.to_array());
+        (tn, m0 | m1 << 4)
+    }
+
+    /// The slab test of lanes `off .. off + 4` of `n`.
     ///
     /// Per axis, t = (plane - o) / d for the near and far planes picked by the
     /// ray's octant. This is bit for bit the min and max of the two planes'
@@ -406,26 +437,83 @@ impl RayData {
     /// with a negative one antitone; equal values may differ only in the sign
     /// of a zero, which no comparison below sees), so hits do not change.
     #[inline(always)]
-    fn slab4(&self, n: &Node4, t_max: f32) -> (Vec4, u32) {
-        let b = &n.b;
+    fn slab4(&self, n: &Node8, off: usize, t_max: f32) -> (Vec4, u32) {
+        let b = |row: usize| Vec4::from_slice(&n.b[row][off..off + 4]);
         let [nx, ny, nz] = self.near;
         let [fx, fy, fz] = self.far;
-        let x0 = (b[nx] - self.ox) * self.ix;
-        let y0 = (b[ny] - self.oy) * self.iy;
-        let z0 = (b[nz] - self.oz) * self.iz;
-        let x1 = (b[fx] - self.ox) * self.ix;
-        let y1 = (b[fy] - self.oy) * self.iy;
-        let z1 = (b[fz] - self.oz) * self.iz;
+        let x0 = (b(nx) - self.ox) * self.ix;
+        let y0 = (b(ny) - self.oy) * self.iy;
+        let z0 = (b(nz) - self.oz) * self.iz;
+        let x1 = (b(fx) - self.ox) * self.ix;
+        let y1 = (b(fy) - self.oy) * self.iy;
+        let z1 = (b(fz) - self.oz) * self.iz;
         let tn = x0.max(y0).max(z0.max(Vec4::ZERO));
         // Clamping t_max to MAX makes unused lanes ([+inf, +inf] boxes, tn =
         // +inf) fail the test below even for an infinite t_max.
         let tf = x1.min(y1).min(z1.min(Vec4::splat(t_max.min(f32::MAX))));
         (tn, (tn * (1.0 / ROBUST)).cmple(tf).bitmask())
     }
+
+    /// [`Self::slab4`] over all eight lanes at once (AVX), operation for
+    /// operation the same (`maxps`/`minps` keep their operand order).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    unsafe fn slab8_avx2(&self, n: &Node8, t_max: f32) -> ([f32; WIDTH], u32) {
+        use std::arch::x86_64::*;
+        let [nx, ny, nz] = self.near;
+        let [fx, fy, fz] = self.far;
+        let b = n.b.as_ptr() as *const f32;
+        // SAFETY: rows are 32 bytes inside a 64-byte aligned node.
+        let (bnx, bny, bnz) = unsafe {
+            (
+                _mm256_load_ps(b.add(WIDTH * nx)),
+                _mm256_load_ps(b.add(WIDTH * ny)),
+                _mm256_load_ps(b.add(WIDTH * nz)),
+            )
+        };
+        let (bfx, bfy, bfz) = unsafe {
+            (
+                _mm256_load_ps(b.add(WIDTH * fx)),
+                _mm256_load_ps(b.add(WIDTH * fy)),
+                _mm256_load_ps(b.add(WIDTH * fz)),
+            )
+        };
+        let (ox, oy, oz) = (
+            _mm256_set1_ps(self.o.x),
+            _mm256_set1_ps(self.o.y),
+            _mm256_set1_ps(self.o.z),
+        );
+        let (ix, iy, iz) = (
+            _mm256_set1_ps(self.inv.x),
+            _mm256_set1_ps(self.inv.y),
+            _mm256_set1_ps(self.inv.z),
+        );
+        let x0 = _mm256_mul_ps(_mm256_sub_ps(bnx, ox), ix);
+        let y0 = _mm256_mul_ps(_mm256_sub_ps(bny, oy), iy);
+        let z0 = _mm256_mul_ps(_mm256_sub_ps(bnz, oz), iz);
+        let x1 = _mm256_mul_ps(_mm256_sub_ps(bfx, ox), ix);
+        let y1 = _mm256_mul_ps(_mm256_sub_ps(bfy, oy), iy);
+        let z1 = _mm256_mul_ps(_mm256_sub_ps(bfz, oz), iz);
+        let tn = _mm256_max_ps(
+            _mm256_max_ps(x0, y0),
+            _mm256_max_ps(z0, _mm256_setzero_ps()),
+        );
+        let tf = _mm256_min_ps(
+            _mm256_min_ps(x1, y1),
+            _mm256_min_ps(z1, _mm256_set1_ps(t_max.min(f32::MAX))),
+        );
+        let ok = _mm256_cmp_ps::<_CMP_LE_OS>(_mm256_mul_ps(tn, _mm256_set1_ps(1.0 / ROBUST)), tf);
+        let mut out = [0.0f32; WIDTH];
+        // SAFETY: `out` holds eight floats.
+        unsafe { _mm256_storeu_ps(out.as_mut_ptr(), tn) };
+        (out, _mm256_movemask_ps(ok) as u32)
+    }
 }
 
 /// Traversal stack (node reference, entry distance), left uninitialised (a
 /// query on a large tree would otherwise clear 1.5 KiB per ray).
+#[derive(Clone, Copy)]
 struct Stack<const N: usize> {
     r: [std::mem::MaybeUninit<u32>; N],
     t: [std::mem::MaybeUninit<f32>; N],
@@ -459,16 +547,68 @@ impl<const N: usize> Stack<N> {
     }
 }
 
+/// One query of [`Bvh::trace`]: a ray and its `t_max`.
+#[derive(Clone, Copy, Debug)]
+pub enum RayQuery {
+    /// The closest hit, as [`Bvh::intersect`].
+    Closest(Ray, f32),
+    /// Whether anything is hit, as [`Bvh::occluded`].
+    Occluded(Ray, f32),
+}
+
+/// The answer to a [`RayQuery`].
+#[derive(Clone, Copy, Debug)]
+pub enum RayAnswer {
+    Closest(Option<Hit>),
+    Occluded(bool),
+}
+
+/// Queries [`Bvh::trace`] keeps in flight at once.
+pub const BATCH: usize = 16;
+
+/// Trees larger than this answer queries faster through [`Bvh::trace`]
+/// ([`Bvh::prefers_batches`]).
+pub const BATCH_MIN_BYTES: usize = 8 << 20;
+
+/// A query's traversal state.
+#[derive(Clone, Copy)]
+struct Query<const N: usize> {
+    r: RayData,
+    /// The closest hit so far (closest-hit queries) or `t_max`.
+    t_best: f32,
+    /// Packet lane, b1, b2 of the closest hit so far; `u32::MAX` for none. Any-hit
+    /// queries set the lane to 0 when they hit.
+    best: (u32, f32, f32),
+    stack: Stack<N>,
+    /// The node or leaf the next step visits.
+    cur: u32,
+    any: bool,
+}
+
+impl<const N: usize> Query<N> {
+    #[inline(always)]
+    fn new(ray: &Ray, t_max: f32, any: bool, root: u32) -> Self {
+        Query {
+            r: RayData::new(ray),
+            t_best: t_max,
+            best: (u32::MAX, 0.0, 0.0),
+            stack: Stack::new(),
+            cur: root,
+            any,
+        }
+    }
+}
+
 /// Traversal stack sizes: the smallest one the tree allows is used (8 bytes
 /// per entry, on the query's stack frame); the large one always suffices
 /// (see `Bvh::build`).
 const TINY_STACK: usize = 16;
 const SMALL_STACK: usize = 64;
-const LARGE_STACK: usize = 3 * 64;
+const LARGE_STACK: usize = (WIDTH - 1) * 64;
 
 impl Bvh {
     /// Builds the BVH with binned SAH (parallel with rayon on large inputs),
-    /// then collapses it into a 4-wide BVH.
+    /// then collapses it into an 8-wide BVH.
     pub fn build(tris: &[[Vec3; 3]]) -> Bvh {
         let (mut refs, mut ids): (Vec<build::PrimRef>, Vec<u32>) = tris
             .par_iter()
@@ -496,6 +636,7 @@ impl Bvh {
                 tris: Vec::new(),
                 prim_ids: Vec::new(),
                 isa: Isa::chosen(),
+                batching: None,
             };
         }
         assert!(refs.len() < 1 << 29, "too many triangles for one BVH");
@@ -524,7 +665,7 @@ impl Bvh {
             prim_ids,
             ..
         } = c;
-        // Every 4-wide node spans at least one BVH2 level on every path and
+        // Every 8-wide node spans at least one BVH2 level on every path and
         // the BVH2 depth is bounded by the builder, so this always holds.
         assert!(stack_needed <= LARGE_STACK);
         nodes.shrink_to_fit();
@@ -537,7 +678,22 @@ impl Bvh {
             tris: packets,
             prim_ids,
             isa: Isa::chosen(),
+            batching: None,
         }
+    }
+
+    /// Whether queries had better go through [`Bvh::trace`] than one at a time: when
+    /// the tree is larger than [`BATCH_MIN_BYTES`], so that queries wait on memory
+    /// (interleaving costs a fifth of the speed of a tree that sits in the caches).
+    pub fn prefers_batches(&self) -> bool {
+        self.batching
+            .unwrap_or(self.memory_bytes() > BATCH_MIN_BYTES)
+    }
+
+    /// Forces [`Bvh::prefers_batches`] (`None`: decided by the tree's size again), for
+    /// tests and benchmarks that compare the two ways of answering queries.
+    pub fn set_batching(&mut self, batching: Option<bool>) {
+        self.batching = batching;
     }
 
     /// Instruction set the queries run with.
@@ -584,144 +740,99 @@ impl Bvh {
 
     #[inline(never)]
     fn intersect_base(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        self.intersect_sized(ray, t_max)
+        self.intersect_sized::<false>(ray, t_max)
     }
 
     #[inline(never)]
     fn occluded_base(&self, ray: &Ray, t_max: f32) -> bool {
-        self.occluded_sized(ray, t_max)
+        self.occluded_sized::<false>(ray, t_max)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     unsafe fn intersect_avx2(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        self.intersect_sized(ray, t_max)
+        self.intersect_sized::<true>(ray, t_max)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     unsafe fn occluded_avx2(&self, ray: &Ray, t_max: f32) -> bool {
-        self.occluded_sized(ray, t_max)
+        self.occluded_sized::<true>(ray, t_max)
     }
 
     /// The traversal with the smallest stack the tree allows.
     #[inline(always)]
-    fn intersect_sized(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+    fn intersect_sized<const AVX: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         if self.stack_needed <= TINY_STACK {
-            self.intersect_impl::<TINY_STACK>(ray, t_max)
+            self.intersect_impl::<TINY_STACK, AVX>(ray, t_max)
         } else if self.stack_needed <= SMALL_STACK {
-            self.intersect_impl::<SMALL_STACK>(ray, t_max)
+            self.intersect_impl::<SMALL_STACK, AVX>(ray, t_max)
         } else {
-            self.intersect_impl::<LARGE_STACK>(ray, t_max)
+            self.intersect_impl::<LARGE_STACK, AVX>(ray, t_max)
         }
     }
 
     #[inline(always)]
-    fn occluded_sized(&self, ray: &Ray, t_max: f32) -> bool {
+    fn occluded_sized<const AVX: bool>(&self, ray: &Ray, t_max: f32) -> bool {
         if self.stack_needed <= TINY_STACK {
-            self.occluded_impl::<TINY_STACK>(ray, t_max)
+            self.occluded_impl::<TINY_STACK, AVX>(ray, t_max)
         } else if self.stack_needed <= SMALL_STACK {
-            self.occluded_impl::<SMALL_STACK>(ray, t_max)
+            self.occluded_impl::<SMALL_STACK, AVX>(ray, t_max)
         } else {
-            self.occluded_impl::<LARGE_STACK>(ray, t_max)
+            self.occluded_impl::<LARGE_STACK, AVX>(ray, t_max)
         }
     }
 
     #[inline(always)]
-    fn intersect_impl<const N: usize>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        let r = RayData::new(ray);
-        let mut t_best = t_max;
-        let mut best = (u32::MAX, 0.0f32, 0.0f32);
-        let mut stack = Stack::<N>::new();
-        let mut cur = self.root;
-        'outer: loop {
-            if cur & LEAF == 0 {
-                let node = &self.nodes[cur as usize];
-                let (tn, mask) = r.slab4(node, t_best);
-                if mask != 0 {
-                    let tn = tn.to_array();
-                    if mask & (mask - 1) == 0 {
-                        // Exactly one child hit.
-                        cur = node.child[mask.trailing_zeros() as usize];
-                        continue;
-                    }
-                    // Two or more: push all but the nearest, farthest first.
-                    let mut m = mask;
-                    let mut ids = [0usize; 4];
-                    let mut k = 0;
-                    while m != 0 {
-                        let i = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        // Insertion sort by decreasing distance.
-                        let mut j = k;
-                        while j > 0 && tn[ids[j - 1]] < tn[i] {
-                            ids[j] = ids[j - 1];
-                            j -= 1;
-                        }
-                        ids[j] = i;
-                        k += 1;
-                    }
-                    for &i in &ids[..k - 1] {
-                        self.prefetch(node.child[i]);
-                        stack.push(node.child[i], tn[i]);
-                    }
-                    cur = node.child[ids[k - 1]];
-                    continue;
-                }
-            } else {
-                let (p, valid) = leaf_packet(cur);
-                let (mut m, t, u, v) = self.tris[p].intersect(&r, t_best, valid);
-                if m != 0 {
-                    let t = t.to_array();
-                    let mut lane = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    while m != 0 {
-                        let i = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        if t[i] < t[lane] {
-                            lane = i;
-                        }
-                    }
-                    t_best = t[lane];
-                    best = (
-                        (4 * p + lane) as u32,
-                        u.to_array()[lane],
-                        v.to_array()[lane],
-                    );
-                }
-            }
-            // Pop the next node that may still hold a closer hit.
-            loop {
-                let Some((r, t)) = stack.pop() else {
-                    break 'outer;
-                };
-                if t <= t_best * ROBUST {
-                    cur = r;
-                    break;
-                }
-            }
-        }
-        if best.0 == u32::MAX {
+    fn intersect_impl<const N: usize, const AVX: bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+    ) -> Option<Hit> {
+        let mut q = Query::<N>::new(ray, t_max, false, self.root);
+        while !self.step::<N, AVX, false>(&mut q) {}
+        self.closest_of(&q)
+    }
+
+    #[inline(always)]
+    fn occluded_impl<const N: usize, const AVX: bool>(&self, ray: &Ray, t_max: f32) -> bool {
+        let mut q = Query::<N>::new(ray, t_max, true, self.root);
+        while !self.step::<N, AVX, false>(&mut q) {}
+        q.best.0 != u32::MAX
+    }
+
+    /// The closest hit a finished closest-hit query found.
+    #[inline(always)]
+    fn closest_of<const N: usize>(&self, q: &Query<N>) -> Option<Hit> {
+        if q.best.0 == u32::MAX {
             return None;
         }
         Some(Hit {
-            t: t_best,
-            prim: self.prim_ids[best.0 as usize],
-            b1: best.1,
-            b2: best.2,
+            t: q.t_best,
+            prim: self.prim_ids[q.best.0 as usize],
+            b1: q.best.1,
+            b2: q.best.2,
         })
     }
 
+    /// One traversal step of `q`: the node or leaf `q.cur` is visited and the
+    /// next one chosen (and, interleaved, prefetched). Returns true when the query is done.
+    /// A single query loops over it; [`Bvh::trace`] interleaves the steps of
+    /// many, so that one query's memory loads overlap the others' work.
     #[inline(always)]
-    fn occluded_impl<const N: usize>(&self, ray: &Ray, t_max: f32) -> bool {
-        let r = RayData::new(ray);
-        let mut stack = Stack::<N>::new();
-        let mut cur = self.root;
-        loop {
-            if cur & LEAF == 0 {
-                let node = &self.nodes[cur as usize];
-                let (_, mask) = r.slab4(node, t_max);
-                if mask != 0 {
+    fn step<const N: usize, const AVX: bool, const IL: bool>(&self, q: &mut Query<N>) -> bool {
+        let cur = q.cur;
+        if cur & LEAF == 0 {
+            let node = &self.nodes[cur as usize];
+            let (tn, mask) = q.r.slab8::<AVX>(node, q.t_best);
+            if mask != 0 {
+                if mask & (mask - 1) == 0 {
+                    // Exactly one child hit.
+                    q.cur = node.child[mask.trailing_zeros() as usize];
+                    self.prefetch_next::<IL>(q.cur);
+                    return false;
+                }
+                if q.any {
                     // Any order will do; push all but the first.
                     let mut m = mask;
                     let first = m.trailing_zeros() as usize;
@@ -730,21 +841,165 @@ impl Bvh {
                         let i = m.trailing_zeros() as usize;
                         m &= m - 1;
                         self.prefetch(node.child[i]);
-                        stack.push(node.child[i], 0.0);
+                        q.stack.push(node.child[i], 0.0);
                     }
-                    cur = node.child[first];
-                    continue;
+                    q.cur = node.child[first];
+                    self.prefetch_next::<IL>(q.cur);
+                    return false;
                 }
-            } else {
-                let (p, valid) = leaf_packet(cur);
-                if self.tris[p].intersect(&r, t_max, valid).0 != 0 {
+                // Two or more: push all but the nearest, farthest first.
+                let mut m = mask;
+                let mut ids = [0usize; WIDTH];
+                let mut k = 0;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    // Insertion sort by decreasing distance.
+                    let mut j = k;
+                    while j > 0 && tn[ids[j - 1]] < tn[i] {
+                        ids[j] = ids[j - 1];
+                        j -= 1;
+                    }
+                    ids[j] = i;
+                    k += 1;
+                }
+                for &i in &ids[..k - 1] {
+                    self.prefetch(node.child[i]);
+                    q.stack.push(node.child[i], tn[i]);
+                }
+                q.cur = node.child[ids[k - 1]];
+                self.prefetch_next::<IL>(q.cur);
+                return false;
+            }
+        } else {
+            let (p, valid) = leaf_packet(cur);
+            let (mut m, t, u, v) = self.tris[p].intersect(&q.r, q.t_best, valid);
+            if m != 0 {
+                if q.any {
+                    q.best.0 = 0;
                     return true;
                 }
+                let t = t.to_array();
+                let mut lane = m.trailing_zeros() as usize;
+                m &= m - 1;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    if t[i] < t[lane] {
+                        lane = i;
+                    }
+                }
+                q.t_best = t[lane];
+                q.best = (
+                    (4 * p + lane) as u32,
+                    u.to_array()[lane],
+                    v.to_array()[lane],
+                );
             }
-            match stack.pop() {
-                Some((r, _)) => cur = r,
-                None => return false,
+        }
+        // Pop the next node that may still hold a closer hit.
+        loop {
+            let Some((r, t)) = q.stack.pop() else {
+                return true;
+            };
+            if q.any || t <= q.t_best * ROBUST {
+                q.cur = r;
+                self.prefetch_next::<IL>(r);
+                return false;
             }
+        }
+    }
+
+    /// Answers many queries at once, interleaving their traversal steps (see
+    /// [`Bvh::step`]): on trees larger than the caches each query waits on
+    /// memory, and another's step runs meanwhile. The answers are those of
+    /// [`Bvh::intersect`] and [`Bvh::occluded`], bit for bit.
+    pub fn trace(&self, queries: &[RayQuery], answers: &mut [RayAnswer]) {
+        assert_eq!(queries.len(), answers.len(), "one answer per query");
+        if self.tris.is_empty() {
+            for (q, a) in queries.iter().zip(answers.iter_mut()) {
+                *a = match q {
+                    RayQuery::Closest(..) => RayAnswer::Closest(None),
+                    RayQuery::Occluded(..) => RayAnswer::Occluded(false),
+                };
+            }
+            return;
+        }
+        for (q, a) in queries.chunks(BATCH).zip(answers.chunks_mut(BATCH)) {
+            match self.isa {
+                // SAFETY: as in `intersect`.
+                #[cfg(target_arch = "x86_64")]
+                Isa::Avx2 => unsafe { self.trace_avx2(q, a) },
+                _ => self.trace_base(q, a),
+            }
+        }
+    }
+
+    #[inline(never)]
+    fn trace_base(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
+        self.trace_sized::<false>(q, a)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn trace_avx2(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
+        self.trace_sized::<true>(q, a)
+    }
+
+    #[inline(always)]
+    fn trace_sized<const AVX: bool>(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
+        if self.stack_needed <= TINY_STACK {
+            self.trace_impl::<TINY_STACK, AVX>(q, a)
+        } else if self.stack_needed <= SMALL_STACK {
+            self.trace_impl::<SMALL_STACK, AVX>(q, a)
+        } else {
+            self.trace_impl::<LARGE_STACK, AVX>(q, a)
+        }
+    }
+
+    /// Up to [`BATCH`] queries, stepped round-robin until all are done.
+    #[inline(always)]
+    fn trace_impl<const N: usize, const AVX: bool>(&self, qs: &[RayQuery], out: &mut [RayAnswer]) {
+        debug_assert!(qs.len() <= BATCH);
+        let mut st: [std::mem::MaybeUninit<Query<N>>; BATCH] =
+            [const { std::mem::MaybeUninit::uninit() }; BATCH];
+        let n = qs.len();
+        for (s, q) in st.iter_mut().zip(qs) {
+            let (ray, t_max, any) = match *q {
+                RayQuery::Closest(r, t) => (r, t, false),
+                RayQuery::Occluded(r, t) => (r, t, true),
+            };
+            s.write(Query::new(&ray, t_max, any, self.root));
+            self.prefetch(self.root);
+        }
+        // SAFETY: the first `n` entries were written above.
+        let st = unsafe { &mut *(&mut st[..n] as *mut [_] as *mut [Query<N>]) };
+        let mut live = [false; BATCH];
+        live[..n].fill(true);
+        let mut left = n;
+        while left > 0 {
+            for (q, alive) in st.iter_mut().zip(live.iter_mut()) {
+                if *alive && self.step::<N, AVX, true>(q) {
+                    *alive = false;
+                    left -= 1;
+                }
+            }
+        }
+        for (q, a) in st.iter().zip(out.iter_mut()) {
+            *a = if q.any {
+                RayAnswer::Occluded(q.best.0 != u32::MAX)
+            } else {
+                RayAnswer::Closest(self.closest_of(q))
+            };
+        }
+    }
+
+    /// Prefetches the node or leaf a query visits next when other queries'
+    /// steps run before it (`IL`, interleaved); a lone query loads it at once.
+    #[inline(always)]
+    fn prefetch_next<const IL: bool>(&self, r: u32) {
+        if IL {
+            self.prefetch(r);
         }
     }
 
@@ -754,9 +1009,8 @@ impl Bvh {
     fn prefetch(&self, r: u32) {
         #[cfg(target_arch = "x86_64")]
         {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
             let (p, lines) = if r & LEAF == 0 {
-                (self.nodes.as_ptr().wrapping_add(r as usize) as *const i8, 2)
+                (self.nodes.as_ptr().wrapping_add(r as usize) as *const i8, 4)
             } else {
                 (
                     self.tris.as_ptr().wrapping_add(leaf_packet(r).0) as *const i8,
@@ -764,9 +1018,7 @@ impl Bvh {
                 )
             };
             for l in 0..lines {
-                // SAFETY: SSE is part of x86-64, and a prefetch never faults
-                // whatever the address.
-                unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64 * l)) };
+                prefetch_line(p.wrapping_add(64 * l));
             }
         }
         #[cfg(not(target_arch = "x86_64"))]
@@ -778,7 +1030,7 @@ impl Bvh {
         self.bounds
     }
 
-    /// Number of nodes: 4-wide interior nodes plus leaves (leaves are stored
+    /// Number of nodes: 8-wide interior nodes plus leaves (leaves are stored
     /// inline in their parents' child references, so only the former take
     /// node memory).
     pub fn node_count(&self) -> usize {
@@ -788,10 +1040,24 @@ impl Bvh {
     /// Heap plus inline memory used by the structure, in bytes.
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
-            + self.nodes.capacity() * std::mem::size_of::<Node4>()
+            + self.nodes.capacity() * std::mem::size_of::<Node8>()
             + self.tris.capacity() * std::mem::size_of::<Tri4>()
             + self.prim_ids.capacity() * std::mem::size_of::<u32>()
     }
+}
+
+/// Asks the CPU to start loading the cache line at `p` into all cache levels (a hint:
+/// no effect off x86-64).
+#[inline(always)]
+pub fn prefetch_line<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE is part of x86-64, and a prefetch never faults whatever the address.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>(p as *const i8)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 /// Asks Linux to back the allocation of `v` (the whole 2 MiB pages inside it)
@@ -816,19 +1082,19 @@ fn advise_huge_pages<T>(v: &Vec<T>) {
     let _ = v;
 }
 
-/// BVH2 → 4-wide BVH conversion state.
+/// BVH2 → 8-wide BVH conversion state.
 struct Collapse<'a> {
     n2: &'a [Node],
     /// Input triangle indices in BVH2 leaf order.
     ids: &'a [u32],
     input: &'a [[Vec3; 3]],
-    nodes: Vec<Node4>,
+    nodes: Vec<Node8>,
     packets: Vec<Tri4>,
     prim_ids: Vec<u32>,
 }
 
 impl Collapse<'_> {
-    /// Collapses the BVH2 subtree at `i` into 4-wide nodes and triangle
+    /// Collapses the BVH2 subtree at `i` into 8-wide nodes and triangle
     /// packets, both laid out depth-first. Returns its reference and the
     /// number of traversal stack entries a query below it may need.
     fn collapse(&mut self, i: usize) -> (u32, usize) {
@@ -849,7 +1115,7 @@ impl Collapse<'_> {
             return (leaf_ref(p, n.count), 0);
         }
         // Open the interior child with the largest surface area until there
-        // are four children (or only leaves).
+        // are eight children (or only leaves).
         let area = |k: usize| {
             Bounds3 {
                 min: n2[k].min,
@@ -857,9 +1123,10 @@ impl Collapse<'_> {
             }
             .half_area()
         };
-        let mut kids = [n.a as usize, n.a as usize + 1, 0, 0];
+        let mut kids = [0usize; WIDTH];
+        kids[..2].copy_from_slice(&[n.a as usize, n.a as usize + 1]);
         let mut nk = 2;
-        while nk < 4 {
+        while nk < WIDTH {
             let Some(pos) = (0..nk)
                 .filter(|&p| !n2[kids[p]].is_leaf())
                 .max_by(|&a, &b| area(kids[a]).total_cmp(&area(kids[b])))
@@ -874,16 +1141,16 @@ impl Collapse<'_> {
         let kids = &kids[..nk];
         let idx = self.nodes.len();
         // Unused lanes get the box [+inf, +inf], which no ray overlaps.
-        let mut b = [[f32::INFINITY; 4]; 6];
+        let mut b = [[f32::INFINITY; WIDTH]; 6];
         for (lane, &k) in kids.iter().enumerate() {
             for a in 0..3 {
                 b[a][lane] = n2[k].min[a];
                 b[a + 3][lane] = n2[k].max[a];
             }
         }
-        self.nodes.push(Node4 {
-            b: b.map(Vec4::from_array),
-            child: [0; 4],
+        self.nodes.push(Node8 {
+            b,
+            child: [0; WIDTH],
         });
         let mut stack_needed = 0;
         for (lane, &k) in kids.iter().enumerate() {

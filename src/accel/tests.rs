@@ -190,7 +190,7 @@ fn check_structure(bvh: &Bvh, input: &[[Vec3; 3]]) {
         } else {
             let n = &bvh.nodes[r as usize];
             let mut used = 0;
-            for lane in 0..4 {
+            for lane in 0..WIDTH {
                 let cmin = Vec3::new(n.b[0][lane], n.b[1][lane], n.b[2][lane]);
                 let cmax = Vec3::new(n.b[3][lane], n.b[4][lane], n.b[5][lane]);
                 if cmin.x == f32::INFINITY {
@@ -416,4 +416,63 @@ fn is_send_sync() {
     fn assert_send_sync<T: Send + Sync>() {}
     assert_send_sync::<Bvh>();
     assert_send_sync::<Hit>();
+}
+
+#[test]
+fn interleaved_queries_answer_as_single_ones_bit_for_bit() {
+    // `Bvh::trace` against `intersect` / `occluded`, on every instruction set, with
+    // closest-hit and any-hit queries mixed in one batch and batches of every length.
+    let mut rng = Rng::new(23);
+    for n in [1, 300, 40_000] {
+        let tris = soup(&mut rng, n, true);
+        let mut bvh = Bvh::build(&tris);
+        let rays: Vec<(Ray, f32)> = (0..5_000).map(|_| random_ray(&mut rng)).collect();
+        let queries: Vec<RayQuery> = rays
+            .iter()
+            .enumerate()
+            .map(|(i, &(r, t))| {
+                if i % 3 == 0 {
+                    RayQuery::Occluded(r, t)
+                } else {
+                    RayQuery::Closest(r, t)
+                }
+            })
+            .collect();
+        let key = |a: &RayAnswer| match *a {
+            RayAnswer::Closest(h) => (
+                h.map(|h| (h.t.to_bits(), h.prim, h.b1.to_bits(), h.b2.to_bits())),
+                false,
+            ),
+            RayAnswer::Occluded(o) => (None, o),
+        };
+        for isa in Isa::available() {
+            assert!(bvh.set_isa(isa));
+            let single: Vec<_> = queries
+                .iter()
+                .map(|q| match *q {
+                    RayQuery::Closest(r, t) => key(&RayAnswer::Closest(bvh.intersect(&r, t))),
+                    RayQuery::Occluded(r, t) => key(&RayAnswer::Occluded(bvh.occluded(&r, t))),
+                })
+                .collect();
+            if n > 1 {
+                assert!(single.iter().filter(|k| k.0.is_some()).count() > 500);
+                assert!(single.iter().filter(|k| k.1).count() > 100);
+            }
+            // Batches of uneven lengths (1, 2, ..., BATCH + 3, ...), over the whole list.
+            let mut answers = vec![RayAnswer::Occluded(false); queries.len()];
+            let (mut at, mut len) = (0, 1);
+            while at < queries.len() {
+                let end = (at + len).min(queries.len());
+                bvh.trace(&queries[at..end], &mut answers[at..end]);
+                at = end;
+                len = len % (BATCH + 3) + 1;
+            }
+            let batched: Vec<_> = answers.iter().map(key).collect();
+            assert!(
+                batched == single,
+                "{}: trace differs from single queries",
+                isa.name()
+            );
+        }
+    }
 }

@@ -14,7 +14,7 @@ pub mod path;
 pub mod rr;
 pub mod visible;
 
-use crate::math::{Ray, Vec2};
+use crate::math::{Ray, Vec2, Vec3};
 use crate::sampling::SampleStream;
 use crate::scene::{Camera, Scene};
 
@@ -309,6 +309,56 @@ impl Integrator {
         }
     }
 
+    /// L~ of the estimate roulette: the scene's, or read from the radiosity solution.
+    fn l_tilde<const N: usize>(&self) -> LTilde<'_, N> {
+        let scene_l = match &self.estimate {
+            Some(e) => e.l_tilde::<N>(),
+            None => crate::spectrum::Spectrum::ZERO,
+        };
+        match (&self.radiosity, self.set.roulette.estimate) {
+            (Some(sol), RrEstimate::Radiosity) => LTilde::Radiosity(sol, scene_l),
+            _ => LTilde::Scene(scene_l),
+        }
+    }
+
+    /// Whether [`Integrator::sample_batch`] serves this estimator on `scene`: the path
+    /// tracer without the radiosity gather, on a BVH large enough that interleaved ray
+    /// queries pay (`Bvh::prefers_batches`).
+    pub fn batches(&self, scene: &Scene) -> bool {
+        matches!(self.set.kind, IntegratorKind::Path)
+            && !matches!(
+                (&self.radiosity, self.set.gather),
+                (Some(_), Gather::Radiosity)
+            )
+            && scene.bvh.prefers_batches()
+    }
+
+    /// [`Integrator::sample`] of up to [`path::BATCH_PATHS`] samples at once (for an
+    /// estimator that [`Integrator::batches`]): sample `i` is of pixel `pixels[i]` with
+    /// stream `streams[i]`; the same values as one at a time, into `out`.
+    pub fn sample_batch<const N: usize>(
+        &self,
+        scene: &Scene,
+        cam: &Camera,
+        pixels: &[(u32, u32)],
+        streams: &mut [SampleStream],
+        c: &mut Counters,
+        out: &mut [[f32; 3]],
+    ) {
+        debug_assert!(matches!(self.set.kind, IntegratorKind::Path));
+        let n = pixels.len();
+        let mut rays = [Ray::new(Vec3::ZERO, Vec3::ZERO); path::BATCH_PATHS];
+        for ((r, &(x, y)), s) in rays.iter_mut().zip(pixels).zip(streams.iter_mut()) {
+            *r = camera_ray(cam, x, y, s);
+        }
+        let mut l = [crate::spectrum::Spectrum::<N>::ZERO; path::BATCH_PATHS];
+        let lt = self.l_tilde::<N>();
+        path::radiance_batch::<N>(scene, &rays[..n], streams, &self.set, &lt, c, &mut l[..n]);
+        for (o, v) in out.iter_mut().zip(&l[..n]) {
+            *o = v.to_rgb();
+        }
+    }
+
     /// One camera sample of pixel (x, y): its value (linear RGB); splats go to `sink`.
     #[inline]
     #[allow(clippy::too_many_arguments)]
@@ -358,17 +408,7 @@ impl Integrator {
         sink: &mut SplatSink,
         c: &mut Counters,
     ) -> [f32; 3] {
-        // L~ of the estimate roulette: the scene's, or read from the radiosity solution
-        let l_tilde = || {
-            let scene_l = match &self.estimate {
-                Some(e) => e.l_tilde::<N>(),
-                None => crate::spectrum::Spectrum::ZERO,
-            };
-            match (&self.radiosity, self.set.roulette.estimate) {
-                (Some(sol), RrEstimate::Radiosity) => LTilde::Radiosity(sol, scene_l),
-                _ => LTilde::Scene(scene_l),
-            }
-        };
+        let l_tilde = || self.l_tilde::<N>();
         match self.set.kind {
             IntegratorKind::Path => {
                 let ray = camera_ray(cam, x, y, s);

@@ -2,6 +2,7 @@
 //! and shading normals, texture coordinates, barycentrics), from `Scene::intersect`.
 
 use super::Scene;
+use crate::accel::{prefetch_line, Hit};
 use crate::math::{Ray, Vec2, Vec3};
 
 /// A ray's hit with everything shading needs.
@@ -24,7 +25,23 @@ impl Scene {
     /// The closest hit along `ray` before `t_max`, with the surface information.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
-        let h = self.bvh.intersect(ray, t_max)?;
+        Some(self.surface_hit(self.bvh.intersect(ray, t_max)?))
+    }
+
+    /// Starts loading what [`Scene::surface_hit`] and [`Scene::material_of`] read of
+    /// triangle `prim` (for batches of hits, whose loads then overlap).
+    #[inline(always)]
+    pub fn prefetch_hit(&self, prim: u32) {
+        let i = prim as usize;
+        prefetch_line(self.tris.as_ptr().wrapping_add(i));
+        prefetch_line(self.normals.as_ptr().wrapping_add(i));
+        prefetch_line(self.uvs.as_ptr().wrapping_add(i));
+        prefetch_line(self.tri_material.as_ptr().wrapping_add(i));
+    }
+
+    /// The surface information of a BVH hit.
+    #[inline]
+    pub fn surface_hit(&self, h: Hit) -> SurfaceHit {
         let i = h.prim as usize;
         let t = &self.tris[i];
         let b0 = 1.0 - h.b1 - h.b2;
@@ -47,7 +64,7 @@ impl Scene {
             Some(uv) => uv[0] * b0 + uv[1] * h.b1 + uv[2] * h.b2,
             None => Vec2::new(h.b1, h.b2),
         };
-        Some(SurfaceHit {
+        SurfaceHit {
             p,
             ng,
             ns,
@@ -56,6 +73,6 @@ impl Scene {
             b2: h.b2,
             prim: h.prim,
             t: h.t,
-        })
+        }
     }
 }
