@@ -229,17 +229,21 @@ impl Tri {
 
 /// Up to four triangles in SoA form (lanes), for a 4-wide Möller–Trumbore
 /// test. Unused lanes are masked out by the leaf's count.
+/// 160 bytes aligned to 32: always within three cache lines.
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
+#[repr(C, align(32))]
 struct Tri4 {
     v0: [Vec4; 3],
     e1: [Vec4; 3],
     e2: [Vec4; 3],
+    /// Input index of each lane's triangle (`u32::MAX` for unused lanes): beside
+    /// the triangles, so that a hit costs no further cache miss.
+    ids: [u32; 4],
 }
 
 impl Tri4 {
-    fn new(tris: &[Tri]) -> Tri4 {
-        debug_assert!(tris.len() <= 4);
+    fn new(tris: &[Tri], ids: &[u32]) -> Tri4 {
+        debug_assert!(tris.len() <= 4 && ids.len() == tris.len());
         let mut a = [[[0.0f32; 4]; 3]; 3];
         for (lane, t) in tris.iter().enumerate() {
             for (k, v) in [t.v0, t.e1, t.e2].iter().enumerate() {
@@ -249,10 +253,13 @@ impl Tri4 {
             }
         }
         let v = |k: usize| a[k].map(Vec4::from_array);
+        let mut lanes = [u32::MAX; 4];
+        lanes[..ids.len()].copy_from_slice(ids);
         Tri4 {
             v0: v(0),
             e1: v(1),
             e2: v(2),
+            ids: lanes,
         }
     }
 
@@ -311,6 +318,7 @@ struct Node8 {
 /// Otherwise a `Node8` index.
 const LEAF: u32 = 1 << 31;
 const _: () = assert!(build::MAX_LEAF <= 4);
+const _: () = assert!(std::mem::size_of::<Tri4>() == 160);
 
 #[inline(always)]
 fn leaf_ref(first: u32, count: u32) -> u32 {
@@ -336,8 +344,6 @@ pub struct Bvh {
     leaf_count: usize,
     /// Triangle packets, one per leaf, in traversal order.
     tris: Vec<Tri4>,
-    /// Input index of each packet lane (`u32::MAX` for unused lanes).
-    prim_ids: Vec<u32>,
     /// Instruction set the queries run with.
     isa: Isa,
     /// [`Bvh::prefers_batches`] forced (tests, benchmarks); `None`: by size.
@@ -564,7 +570,7 @@ pub enum RayAnswer {
 }
 
 /// Queries [`Bvh::trace`] keeps in flight at once.
-pub const BATCH: usize = 16;
+pub const BATCH: usize = 32;
 
 /// Trees larger than this answer queries faster through [`Bvh::trace`]
 /// ([`Bvh::prefers_batches`]).
@@ -634,7 +640,6 @@ impl Bvh {
                 stack_needed: 0,
                 leaf_count: 0,
                 tris: Vec::new(),
-                prim_ids: Vec::new(),
                 isa: Isa::chosen(),
                 batching: None,
             };
@@ -652,7 +657,6 @@ impl Bvh {
             input: tris,
             nodes: Vec::with_capacity(nodes2.len() / 2 + 1),
             packets: Vec::with_capacity(nodes2.len() / 2 + 1),
-            prim_ids: Vec::with_capacity(2 * nodes2.len() + 4),
         };
         // Before the arrays are written, so the kernel can back them with huge
         // pages as they are first touched.
@@ -660,10 +664,7 @@ impl Bvh {
         advise_huge_pages(&c.packets);
         let (root, stack_needed) = c.collapse(0);
         let Collapse {
-            mut nodes,
-            packets,
-            prim_ids,
-            ..
+            mut nodes, packets, ..
         } = c;
         // Every 8-wide node spans at least one BVH2 level on every path and
         // the BVH2 depth is bounded by the builder, so this always holds.
@@ -676,7 +677,6 @@ impl Bvh {
             stack_needed,
             leaf_count: packets.len(),
             tris: packets,
-            prim_ids,
             isa: Isa::chosen(),
             batching: None,
         }
@@ -809,7 +809,7 @@ impl Bvh {
         }
         Some(Hit {
             t: q.t_best,
-            prim: self.prim_ids[q.best.0 as usize],
+            prim: self.tris[q.best.0 as usize / 4].ids[q.best.0 as usize % 4],
             b1: q.best.1,
             b2: q.best.2,
         })
@@ -1042,7 +1042,6 @@ impl Bvh {
         std::mem::size_of::<Self>()
             + self.nodes.capacity() * std::mem::size_of::<Node8>()
             + self.tris.capacity() * std::mem::size_of::<Tri4>()
-            + self.prim_ids.capacity() * std::mem::size_of::<u32>()
     }
 }
 
@@ -1090,7 +1089,6 @@ struct Collapse<'a> {
     input: &'a [[Vec3; 3]],
     nodes: Vec<Node8>,
     packets: Vec<Tri4>,
-    prim_ids: Vec<u32>,
 }
 
 impl Collapse<'_> {
@@ -1107,11 +1105,7 @@ impl Collapse<'_> {
                 *t = Tri::new(&self.input[i as usize]);
             }
             let p = self.packets.len() as u32;
-            self.packets.push(Tri4::new(&tris[..ids.len()]));
-            for lane in 0..4 {
-                self.prim_ids
-                    .push(ids.get(lane).copied().unwrap_or(u32::MAX));
-            }
+            self.packets.push(Tri4::new(&tris[..ids.len()], ids));
             return (leaf_ref(p, n.count), 0);
         }
         // Open the interior child with the largest surface area until there

@@ -157,7 +157,6 @@ fn check_structure(bvh: &Bvh, input: &[[Vec3; 3]]) {
         return;
     }
     assert!(bvh.stack_needed <= LARGE_STACK);
-    assert_eq!(bvh.prim_ids.len(), 4 * bvh.tris.len());
     let mut seen = vec![0u32; input.len()];
     let b = bvh.bounds();
     let mut stack = vec![(bvh.root, b.min, b.max)];
@@ -173,7 +172,7 @@ fn check_structure(bvh: &Bvh, input: &[[Vec3; 3]]) {
             let (p, valid) = leaf_packet(r);
             let t = &bvh.tris[p];
             for lane in 0..4 {
-                let id = bvh.prim_ids[4 * p + lane];
+                let id = bvh.tris[p].ids[lane];
                 if valid & (1 << lane) == 0 {
                     assert_eq!(id, u32::MAX);
                     continue;
