@@ -61,6 +61,8 @@ struct Cand {
     idx: usize,
     dx: i32,
     dy: i32,
+    /// ||q - p||, computed once (the kernel reads it for every window side m).
+    r: f64,
     delta: f64,
 }
 
@@ -70,7 +72,12 @@ struct Scratch {
     /// Accepted f*, aligned with the first entries of `cand`.
     w: Vec<f64>,
     tmp: Vec<f64>,
+    /// Every candidate's Delta, ascending; kept sorted as the window grows (each new
+    /// strip is sorted and merged in), so no window is sorted from scratch.
     sorted: Vec<f64>,
+    /// The new strip's Delta, then the merge buffer.
+    strip: Vec<f64>,
+    merged: Vec<f64>,
 }
 
 /// Per-pixel result of [`Dtf::run`]: m, M, f*[0], filtered C_i, displayed C.
@@ -308,32 +315,46 @@ impl Dtf {
             .sum()
     }
 
-    /// d(q - p) for window side m.
+    /// d(q - p) for window side m; `r` = ||q - p|| (the square root of dx^2 + dy^2).
     #[inline]
-    fn kernel(&self, dx: i32, dy: i32, m: u32) -> f64 {
-        let r2 = (dx * dx + dy * dy) as f64;
+    fn kernel(&self, dx: i32, dy: i32, r: f64, m: u32) -> f64 {
         let m = m as f64;
         match self.params.kernel {
-            Kernel::Pyramid => (m * std::f64::consts::FRAC_1_SQRT_2 - r2.sqrt()).max(0.0),
-            Kernel::Gaussian => (-4.0 * r2 / (m * m)).exp(),
+            Kernel::Pyramid => (m * std::f64::consts::FRAC_1_SQRT_2 - r).max(0.0),
+            Kernel::Gaussian => (-4.0 * ((dx * dx + dy * dy) as f64) / (m * m)).exp(),
         }
     }
 
     /// Region forming for pixel p = (x, y) (paper §5, third step). On return the first
     /// `s.w.len()` candidates carry the accepted weights f*; returns the accepted m.
     fn region_into(&self, x: usize, y: usize, s: &mut Scratch) -> u32 {
+        // `grow` leaves the accepted window's unnormalised f^+ d in `s.w` and 1 / its sum.
+        let (m, inv) = self.grow(x, y, s);
+        if inv != 1.0 {
+            s.w.iter_mut().for_each(|f| *f *= inv);
+        }
+        m
+    }
+
+    /// The window growth of [`Dtf::region_into`]: returns the accepted m and the factor
+    /// that normalises the accepted coefficients left in `s.w`.
+    fn grow(&self, x: usize, y: usize, s: &mut Scratch) -> (u32, f64) {
         let (w, h) = (self.width as isize, self.height as isize);
         let p = y * self.width + x;
         s.cand.clear();
         s.w.clear();
+        s.sorted.clear();
         // f*[0] = 1: the primary pixel alone.
         s.cand.push(Cand {
             idx: p,
             dx: 0,
             dy: 0,
+            r: 0.0,
             delta: 0.0,
         });
         s.w.push(1.0);
+        s.sorted.push(0.0);
+        let mut inv_acc = 1.0;
 
         // N = 0 (no independent samples): C_i[p] does not exist and the display gives C_d.
         // sigma = 0: no Monte-Carlo error to trade for bias, so filtering can only hurt
@@ -341,10 +362,11 @@ impl Dtf {
         let big_n = self.n_ind[p];
         let sg = self.sigma[p];
         if big_n == 0 || !(sg > 0.0 && sg.is_finite()) {
-            return 1;
+            return (1, inv_acc);
         }
         let np_stop = self.alloc[p] as f64 * self.params.stop_ratio as f64;
         let sqrt_n = (big_n as f64).sqrt();
+        let active_set = self.params.clamp == Clamp::ActiveSet;
 
         // Current (clipped, inclusive) window and sum_r Delta_r, both grown incrementally:
         // with p at offset floor((m-1)/2) the m-window contains the (m-1)-window, so only
@@ -361,6 +383,7 @@ impl Dtf {
             let nx1 = (px - off + m as isize - 1).min(w - 1);
             let ny0 = (py - off).max(0);
             let ny1 = (py - off + m as isize - 1).min(h - 1);
+            s.strip.clear();
             for qy in ny0..=ny1 {
                 for qx in nx0..=nx1 {
                     if (x0..=x1).contains(&qx) && (y0..=y1).contains(&qy) {
@@ -370,7 +393,7 @@ impl Dtf {
                     // "if N[p] < N[q] then stop for pixel p": keep the (m-1)-window. With
                     // a tolerance of `stop_ratio` (1: the paper's rule).
                     if self.alloc[q] as f64 > np_stop {
-                        return m_acc;
+                        return (m_acc, inv_acc);
                     }
                     // A pixel without independent samples has no C_i to average: it is
                     // left out of the neighbourhood (as if outside the image).
@@ -380,22 +403,45 @@ impl Dtf {
                     // Delta_q = ||C_d[p] - C_d[q]||.
                     let delta = self.dep_delta(p, q).max(self.guard_delta(p, q));
                     sum_delta += delta;
+                    let (dx, dy) = ((qx - px) as i32, (qy - py) as i32);
                     s.cand.push(Cand {
                         idx: q,
-                        dx: (qx - px) as i32,
-                        dy: (qy - py) as i32,
+                        dx,
+                        dy,
+                        r: ((dx * dx + dy * dy) as f64).sqrt(),
                         delta,
                     });
+                    s.strip.push(delta);
                 }
             }
             (x0, x1, y0, y1) = (nx0, nx1, ny0, ny1);
+            if active_set && !s.strip.is_empty() {
+                // Merge the strip's sorted Delta into the window's: the same ascending
+                // sequence as sorting the whole window (total_cmp is a total order).
+                s.strip.sort_unstable_by(f64::total_cmp);
+                s.merged.clear();
+                let (a, b) = (&s.sorted, &s.strip);
+                let (mut i, mut j) = (0, 0);
+                while i < a.len() && j < b.len() {
+                    if a[i].total_cmp(&b[j]).is_le() {
+                        s.merged.push(a[i]);
+                        i += 1;
+                    } else {
+                        s.merged.push(b[j]);
+                        j += 1;
+                    }
+                }
+                s.merged.extend_from_slice(&a[i..]);
+                s.merged.extend_from_slice(&b[j..]);
+                std::mem::swap(&mut s.sorted, &mut s.merged);
+            }
 
             // Unnormalised coefficients f, clipped to f^+. M is the number of pixels
             // actually in the window, so that sum f = 1 holds at the image border too.
             let big_m = s.cand.len() as f64;
             let k = sqrt_n / (self.params.z as f64 * sg * big_m.sqrt());
             if !k.is_finite() {
-                return m_acc;
+                return (m_acc, inv_acc);
             }
             s.tmp.clear();
             match self.params.clamp {
@@ -411,9 +457,6 @@ impl Dtf {
                 Clamp::ActiveSet => {
                     // f = k (lambda - Delta_q)^+, lambda from the sorted Delta: the largest
                     // active set {j smallest} with lambda_j = (1/k + sum_j Delta)/j > Delta_j.
-                    s.sorted.clear();
-                    s.sorted.extend(s.cand.iter().map(|c| c.delta));
-                    s.sorted.sort_by(f64::total_cmp);
                     let inv_k = 1.0 / k;
                     let (mut prefix, mut lambda) = (0.0, 0.0);
                     for (j, &d) in s.sorted.iter().enumerate() {
@@ -432,25 +475,25 @@ impl Dtf {
             // f^+ d and its sum. (Not incremental: f and d both change with M.)
             let mut sum = 0.0;
             for (f, c) in s.tmp.iter_mut().zip(&s.cand) {
-                *f *= self.kernel(c.dx, c.dy, m);
+                *f *= self.kernel(c.dx, c.dy, c.r, m);
                 sum += *f;
             }
             if !(sum > 0.0 && sum.is_finite()) {
-                return m_acc;
+                return (m_acc, inv_acc);
             }
             // f*_new[0] = f^+[0] d(0) / sum_r f^+[r-p] d(r-p): accept the m-window only if
             // the primary weight drops by at least Delta f[0]_min.
             let f0_new = s.tmp[0] / sum;
             if f0_old - f0_new < self.params.df0_min as f64 {
-                return m_acc;
+                return (m_acc, inv_acc);
             }
-            let inv = 1.0 / sum;
-            s.w.clear();
-            s.w.extend(s.tmp.iter().map(|f| f * inv));
+            // Keep the accepted coefficients unnormalised (normalised once, at the end).
+            inv_acc = 1.0 / sum;
+            std::mem::swap(&mut s.w, &mut s.tmp);
             f0_old = f0_new;
             m_acc = m;
         }
-        m_acc
+        (m_acc, inv_acc)
     }
 
     /// Region forming, filtering and display for every pixel (in parallel).
