@@ -13,17 +13,12 @@ than their CPU time. Prints each round, then per configuration the median second
 median of its per-round ratio to the first configuration."""
 import os, statistics, subprocess, sys, tempfile
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from time_ab import split_groups
+
 args = sys.argv[1:]
 rounds, scene = int(args[0]), args[1]
-groups, cur = [], []
-for a in args[2:]:
-    if a == "--":
-        groups.append(cur)
-        cur = []
-    else:
-        cur.append(a)
-groups.append(cur)
-common, configs = groups[0], groups[1:]
+common, configs = split_groups(args[2:])
 if len(configs) < 2:
     sys.exit("dtf_cpu_ab.py: give at least two configurations after --")
 secs = [[] for _ in configs]

@@ -970,8 +970,8 @@ impl Bvh {
                 RayQuery::Occluded(r, t) => (r, t, true),
             };
             s.write(Query::new(&ray, t_max, any, self.root));
-            self.prefetch(self.root);
         }
+        self.prefetch(self.root);
         // SAFETY: the first `n` entries were written above.
         let st = unsafe { &mut *(&mut st[..n] as *mut [_] as *mut [Query<N>]) };
         let mut live = [false; BATCH];

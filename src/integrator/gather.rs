@@ -194,9 +194,13 @@ pub fn radiance<const N: usize>(
 
         // Next-event estimation (beta_d is black at non-delta vertices).
         if !bsdf.is_delta() {
-            l += super::path::next_event::<N>(
+            if let Some((r, t_max, e)) = super::path::next_event::<N>(
                 scene, hit.p, ng, &frame, wo_l, &bsdf, &sel, u_sel, u_light, &beta, c,
-            );
+            ) {
+                if !scene.bvh.occluded(&r, t_max) {
+                    l += e;
+                }
+            }
         }
 
         // K gather rays: the diffuse lobe estimated on its own, never rouletted

@@ -67,15 +67,15 @@ pub fn radiance_batch<const N: usize>(
     use crate::accel::{RayAnswer, RayQuery};
     let n = rays.len();
     assert!(n <= BATCH_PATHS && streams.len() == n && out.len() == n);
-    let mut st: [Option<PathState<N>>; BATCH_PATHS] = [None; BATCH_PATHS];
+    let mut st = [PathState::<N>::DONE; BATCH_PATHS];
     for (p, &r) in st.iter_mut().zip(rays) {
-        *p = Some(PathState::new(r, c));
+        *p = PathState::new(r, c);
     }
     let mut qs = [RayQuery::Occluded(Ray::new(Vec3::ZERO, Vec3::ZERO), 0.0); 2 * BATCH_PATHS];
     let mut ans = [RayAnswer::Occluded(false); 2 * BATCH_PATHS];
     loop {
         let mut k = 0;
-        for p in st[..n].iter().flatten() {
+        for p in &st[..n] {
             if let Some((r, t_max, _)) = p.shadow {
                 qs[k] = RayQuery::Occluded(r, t_max);
                 k += 1;
@@ -97,7 +97,6 @@ pub fn radiance_batch<const N: usize>(
         }
         let mut a = ans[..k].iter();
         for (p, s) in st[..n].iter_mut().zip(streams.iter_mut()) {
-            let Some(p) = p else { continue };
             if p.shadow.is_some() {
                 let Some(RayAnswer::Occluded(o)) = a.next() else {
                     unreachable!("answers follow the queries")
@@ -116,11 +115,9 @@ pub fn radiance_batch<const N: usize>(
         }
     }
     for (o, p) in out.iter_mut().zip(st[..n].iter_mut()) {
-        *o = p.as_mut().map_or(Spectrum::ZERO, |p| {
-            // A last estimate term (the path ended with no shadow ray) is still to add.
-            p.resolve(false);
-            p.l
-        });
+        // A last estimate term (the path ended with no shadow ray) is still to add.
+        p.resolve(false);
+        *o = p.l;
     }
 }
 
@@ -148,18 +145,24 @@ struct PathState<const N: usize> {
 }
 
 impl<const N: usize> PathState<N> {
+    /// A path with nothing left to do (and nothing gathered).
+    const DONE: Self = PathState {
+        l: Spectrum::ZERO,
+        beta: Spectrum::ONE,
+        prev_pdf: 0.0,
+        prev_delta: true,
+        segments: 0,
+        ray: None,
+        shadow: None,
+        est: None,
+    };
+
     #[inline]
     fn new(ray: Ray, c: &mut Counters) -> Self {
         c.paths += 1;
         PathState {
-            l: Spectrum::ZERO,
-            beta: Spectrum::ONE,
-            prev_pdf: 0.0,
-            prev_delta: true,
-            segments: 0,
             ray: Some(ray),
-            shadow: None,
-            est: None,
+            ..Self::DONE
         }
     }
 
@@ -234,7 +237,7 @@ impl<const N: usize> PathState<N> {
 
         // Next-event estimation (its shadow ray is answered by `resolve`).
         if !bsdf.is_delta() {
-            self.shadow = next_event_unshadowed::<N>(
+            self.shadow = next_event::<N>(
                 scene, hit.p, ng, &frame, wo_l, &bsdf, &sel, u_sel, u_light, &beta, c,
             );
         }
@@ -327,38 +330,14 @@ pub fn emission<const N: usize>(
     Some((le, w))
 }
 
-/// Next-event estimation at a non-delta vertex: a point sampled on the lights, its
-/// visibility, MIS-weighted (power heuristic) against the roulette's selection density.
-/// Returns beta f Le w / p_light (zero if the point is not seen). Shared by the path
-/// tracer and the radiosity gather.
+/// Next-event estimation at a non-delta vertex: a point sampled on the lights,
+/// MIS-weighted (power heuristic) against the roulette's selection density, before its
+/// visibility: the shadow ray, its t_max, and beta f Le w / p_light to add if nothing is
+/// in the way (`None`: nothing to add whatever the visibility). Shared by the path tracer
+/// (which answers the shadow ray in `PathState::resolve`) and the radiosity gather.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn next_event<const N: usize>(
-    scene: &Scene,
-    p: crate::math::Vec3,
-    ng: crate::math::Vec3,
-    frame: &Frame,
-    wo_l: crate::math::Vec3,
-    bsdf: &crate::material::Bsdf,
-    sel: &super::rr::Selection,
-    u_sel: f32,
-    u_light: glam::Vec2,
-    beta: &Spectrum<N>,
-    c: &mut Counters,
-) -> Spectrum<N> {
-    match next_event_unshadowed(
-        scene, p, ng, frame, wo_l, bsdf, sel, u_sel, u_light, beta, c,
-    ) {
-        Some((r, t_max, e)) if !scene.bvh.occluded(&r, t_max) => e,
-        _ => Spectrum::ZERO,
-    }
-}
-
-/// [`next_event`] before its shadow ray: the ray, its t_max, and beta f Le w / p_light if
-/// nothing is in the way (`None`: nothing to add whatever the visibility).
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn next_event_unshadowed<const N: usize>(
     scene: &Scene,
     p: crate::math::Vec3,
     ng: crate::math::Vec3,
@@ -420,7 +399,7 @@ fn facing(
 
 /// Next-event estimation to a point light (Dirac: no MIS) or the environment (MIS against
 /// the roulette's selection density), before its shadow ray (as
-/// [`next_event_unshadowed`]). `kind` is what `Lights::choose` picked.
+/// [`next_event`]). `kind` is what `Lights::choose` picked.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
 fn next_event_distant<const N: usize>(

@@ -146,14 +146,13 @@ fn pass<const N: usize>(
                 .collect();
             let mut pixels = [(0u32, y as u32); BATCH_PATHS];
             let mut vals = [[0.0f32; 3]; BATCH_PATHS];
+            let mut streams = Vec::with_capacity(BATCH_PATHS);
             for chunk in jobs.chunks(BATCH_PATHS) {
-                let mut streams: Vec<SampleStream> = chunk
-                    .iter()
-                    .map(|&(x, k)| {
-                        let pixel = (y * w + x as usize) as u32;
-                        SampleStream::new(&set.sampler, p.stream, pixel, p.first_index + k)
-                    })
-                    .collect();
+                streams.clear();
+                streams.extend(chunk.iter().map(|&(x, k)| {
+                    let pixel = (y * w + x as usize) as u32;
+                    SampleStream::new(&set.sampler, p.stream, pixel, p.first_index + k)
+                }));
                 for (px, &(x, _)) in pixels.iter_mut().zip(chunk) {
                     px.0 = x;
                 }
