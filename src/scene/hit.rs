@@ -40,7 +40,7 @@ impl Scene {
     }
 
     /// The surface information of a BVH hit.
-    #[inline]
+    #[inline(always)]
     pub fn surface_hit(&self, h: Hit) -> SurfaceHit {
         let i = h.prim as usize;
         let t = &self.tris[i];
