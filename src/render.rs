@@ -265,6 +265,13 @@ pub struct DtfStats {
     pub filter_seconds: f64,
     pub filter_share: f64,
     pub average_region: f64,
+    /// Over BDPT with `--dtf-light auto`: light paths traced for light tracing alone, the
+    /// share of phase 2 they took, and phase 1's share of the variance in the splats.
+    pub light_paths: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_share: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub splat_variance_share: Option<f64>,
     pub params: DtfParams,
 }
 
@@ -397,6 +404,9 @@ pub fn render_scene(
                 filter_share: run.filter_seconds / run.seconds,
                 average_region: run.out.region.iter().map(|&m| m as f64).sum::<f64>()
                     / run.out.region.len() as f64,
+                light_paths: run.light_paths,
+                light_share: run.light_plan.map(|p| p.share),
+                splat_variance_share: run.light_plan.map(|p| p.splat_variance_share),
                 params: params.clone(),
             };
             let spp = (film.total_samples() as f64 / (set.width as f64 * set.height as f64)).round()

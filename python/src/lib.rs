@@ -619,15 +619,15 @@ fn render_dtf_part<'py>(
                 set.spectral.bands(),
                 &Silent,
             )?;
-            let pass = DtfPass {
+            let pass = DtfPass::samples(
                 dependent,
                 stream,
-                counts: match &per_pixel {
+                match &per_pixel {
                     Some(v) => Counts::PerPixel(v),
                     None => Counts::Uniform(n),
                 },
                 rays,
-            };
+            );
             let (film, r, c) = run_dtf_pass(&sc, &integ, &set, &pass, first, &Silent)?;
             let end = first as u64
                 + per_pixel
@@ -662,6 +662,13 @@ impl kalos::pipeline::DtfPasses for PyPasses<'_> {
         pass: kalos::pipeline::DtfPass<'_>,
     ) -> Result<(kalos::film::Film, Vec<u64>, kalos::integrator::Counters), String> {
         use kalos::pipeline::Counts;
+        if pass.lt_ratio.is_some() || pass.light_paths > 0 {
+            return Err(
+                "dtf over bdpt: the light paths of their own (--dtf-light auto) are not \
+                 distributed yet; pass dtf_light=\"off\""
+                    .into(),
+            );
+        }
         let py = self.run_pass.py();
         let (n, counts) = match pass.counts {
             Counts::Uniform(n) => (n, None),

@@ -118,6 +118,35 @@ impl SplatFilm {
         out
     }
 
+    /// The variance of pixel i's value split in its two parts, each from the spread of
+    /// its batch images: (the camera samples' mean, the splat image). The first falls with
+    /// the pixel's own samples, the second with the light paths of the whole film.
+    pub fn batch_variance_parts(&self, i: usize, pixels: usize) -> ([f64; 3], [f64; 3]) {
+        let mut cam: Vec<[f64; 3]> = Vec::with_capacity(BATCHES);
+        let mut spl: Vec<[f64; 3]> = Vec::with_capacity(BATCHES);
+        for b in 0..BATCHES {
+            let n = self.batch_n[i][b];
+            if n == 0 || self.batch_paths[b] == 0 {
+                continue;
+            }
+            let km = 1.0 / (n as f64 * FIXED);
+            let ks = pixels as f64 / (self.batch_paths[b] as f64 * FIXED);
+            cam.push([0, 1, 2].map(|c| self.batch_sum[i][b][c] as f64 * km));
+            spl.push([0, 1, 2].map(|c| self.batch_splat[i][b][c] as f64 * ks));
+        }
+        let var = |vals: &[[f64; 3]]| {
+            let k = vals.len();
+            if k < 2 {
+                return [0.0; 3];
+            }
+            [0, 1, 2].map(|c| {
+                let m = vals.iter().map(|v| v[c]).sum::<f64>() / k as f64;
+                vals.iter().map(|v| (v[c] - m).powi(2)).sum::<f64>() / (k * (k - 1)) as f64
+            })
+        };
+        (var(&cam), var(&spl))
+    }
+
     /// Add another splat film (exact).
     pub fn merge_from(&mut self, o: &SplatFilm) {
         for (a, b) in self.sum.iter_mut().zip(&o.sum) {

@@ -99,7 +99,7 @@ pub enum Strategies {
     LightTracing,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Debug, PartialEq, Default)]
 pub struct BdptOptions {
     pub heuristic: MisHeuristic,
     pub strategies: Strategies,
@@ -109,7 +109,46 @@ pub struct BdptOptions {
     /// pixels. With the whole path shared, every pixel splats the same n light subpaths to
     /// the same n x (path length) pixels, and C_d's light-tracing share is n bright dots.
     pub light_per_pixel: bool,
+    /// Light-tracing paths per camera sample, per pixel (K; None = 1 everywhere): the
+    /// sample counts of Veach's multi-sample MIS when light subpaths are traced for light
+    /// tracing alone besides the camera samples' own (`light_path_sample`).
+    pub lt_ratio: Option<std::sync::Arc<LtRatio>>,
 }
+
+/// K[p], the light-tracing paths per camera sample in pixel p, for the MIS weights.
+///
+/// With L light paths splatting over a film of P pixels and N_p camera samples in pixel p,
+/// the balance heuristic of a path through p weighs its light-tracing strategy (s, 1) with
+/// n = L / P and every other strategy with n = N_p: relative to the camera strategies,
+/// K_p = L / (P N_p) (1 when each camera sample brings one light subpath). Any K > 0 keeps
+/// the weights of a path summing to 1, so the estimator is unbiased whatever K; the right
+/// K only lowers its variance. Both kinds of samples must read the same K_p.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LtRatio {
+    pub width: u32,
+    pub height: u32,
+    pub k: Vec<f32>,
+}
+
+impl LtRatio {
+    /// K of the pixel containing film position `r` (1 outside the film).
+    #[inline]
+    pub fn at(&self, r: Vec2) -> f32 {
+        if !(r.x >= 0.0 && r.y >= 0.0) {
+            return 1.0;
+        }
+        let (x, y) = (r.x as u32, r.y as u32);
+        if x < self.width && y < self.height {
+            self.k[(y * self.width + x) as usize]
+        } else {
+            1.0
+        }
+    }
+}
+
+/// Bounds of K (a pixel without camera samples would have K = infinity).
+pub const LT_RATIO_MIN: f32 = 1.0 / 64.0;
+pub const LT_RATIO_MAX: f32 = 64.0;
 
 /// One strategy's contribution, for the debug layers (pbrt's visualizestrategies).
 #[derive(Clone, Copy, Debug)]
@@ -335,6 +374,7 @@ fn random_walk<const N: usize>(
     };
     while path.len() < max_len {
         c.rays += 1;
+        c.light_rays += importance as u64;
         let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
             break;
         };
@@ -430,6 +470,7 @@ pub(crate) fn mis_weight<const N: usize>(
     s: usize,
     t: usize,
     heuristic: MisHeuristic,
+    lt_ratio: f32,
 ) -> f32 {
     if s + t == 2 {
         return 1.0;
@@ -464,6 +505,9 @@ pub(crate) fn mis_weight<const N: usize>(
 
     let remap = |f: f32| if f != 0.0 { f } else { 1.0 };
     let power = heuristic == MisHeuristic::Power;
+    // Multi-sample MIS: the light-tracing strategy (s + t - 1, 1) has K times the samples
+    // of the others (n_i p_i in the balance heuristic, (n_i p_i)^2 in the power one).
+    let k = if power { lt_ratio * lt_ratio } else { lt_ratio };
     let mut sum = 0.0f32;
     // Camera side: strategies (s + t - i, i) for i = t - 1 .. 1.
     let mut ri = 1.0f32;
@@ -480,7 +524,7 @@ pub(crate) fn mis_weight<const N: usize>(
         ri *= if power { r * r } else { r };
         let delta_i = i != t - 1 && v.delta;
         if !delta_i && !cv(i - 1).delta {
-            sum += ri;
+            sum += if i == 1 { ri * k } else { ri };
         }
     }
     // Light side: strategies (i, s + t - i) for i = s - 1 .. 0.
@@ -502,6 +546,10 @@ pub(crate) fn mis_weight<const N: usize>(
         if !delta_i && !delta_prev {
             sum += ri;
         }
+    }
+    if t == 1 {
+        // this strategy is the light tracing one: the others relative to K of it
+        sum /= k;
     }
     let w = 1.0 / (1.0 + sum);
     if w.is_finite() {
@@ -813,6 +861,10 @@ pub fn sample_pixel_with<const N: usize>(
             let w = if only_lt {
                 1.0
             } else {
+                let k = match &opts.lt_ratio {
+                    Some(m) => m.at(conn.raster.unwrap_or(raster)),
+                    None => 1.0,
+                };
                 mis_weight(
                     scene,
                     cam,
@@ -822,6 +874,7 @@ pub fn sample_pixel_with<const N: usize>(
                     s_len,
                     t,
                     opts.heuristic,
+                    k,
                 )
             };
             let lw = conn.l * w;
@@ -845,6 +898,55 @@ pub fn sample_pixel_with<const N: usize>(
         }
     }
     l.to_rgb()
+}
+
+/// One light subpath traced for light tracing alone (no camera sample): every (s, 1)
+/// connection splatted, MIS-weighted with the K of the pixel it lands in (`LtRatio`; the
+/// film counts the path as one more light path). The light subpath uses the dimensions of
+/// a camera sample's (`dims::LIGHT_ORIGIN`, the light blocks), so a stream of its own per
+/// path keeps it independent of the camera samples.
+pub fn light_path_sample<const N: usize>(
+    scene: &Scene,
+    cam: &Camera,
+    s: &mut SampleStream,
+    set: &IntegratorSettings,
+    opts: &BdptOptions,
+    c: &mut Counters,
+    splat: &mut dyn FnMut(glam::Vec2, [f32; 3]),
+) {
+    let rr = roulette(set);
+    let max_segments = set.max_segments() as usize;
+    let mut light: Vec<Vertex<N>> = Vec::with_capacity(8);
+    light_subpath(scene, max_segments, s, &rr, c, &mut light);
+    for s_len in 2..=light.len().min(max_segments) {
+        let Some(conn) = connect(scene, cam, &light, &[], s_len, 1, s, c) else {
+            continue;
+        };
+        if conn.l.is_black() || !conn.l.is_finite() {
+            continue;
+        }
+        let Some(r) = conn.raster else {
+            continue;
+        };
+        let k = match &opts.lt_ratio {
+            Some(m) => m.at(r),
+            None => 1.0,
+        };
+        let w = mis_weight(
+            scene,
+            cam,
+            &light,
+            &[],
+            conn.sampled.as_ref(),
+            s_len,
+            1,
+            opts.heuristic,
+            k,
+        );
+        if w > 0.0 {
+            splat(r, (conn.l * w).to_rgb());
+        }
+    }
 }
 
 #[cfg(test)]

@@ -111,12 +111,16 @@ impl IntegratorSettings {
 pub struct Counters {
     pub paths: u64,
     pub rays: u64,
+    /// Of `rays`, those that extended BDPT's light subpaths (what a light path traced for
+    /// light tracing alone costs, besides its connections to the camera).
+    pub light_rays: u64,
 }
 
 impl Counters {
     pub fn add(&mut self, o: &Counters) {
         self.paths += o.paths;
         self.rays += o.rays;
+        self.light_rays += o.light_rays;
     }
 }
 
@@ -287,6 +291,7 @@ impl Integrator {
                 heuristic: set.mis,
                 strategies: bdpt::Strategies::All,
                 light_per_pixel: false,
+                lt_ratio: None,
             },
         })
     }
@@ -297,6 +302,36 @@ impl Integrator {
         let mut i = self.clone();
         i.bdpt.light_per_pixel = true;
         i
+    }
+
+    /// The estimator with K[p] light-tracing paths per camera sample in its MIS weights
+    /// (BDPT with light paths traced for light tracing alone: `bdpt::LtRatio`); the
+    /// others unchanged.
+    pub fn with_lt_ratio(&self, k: Option<Arc<bdpt::LtRatio>>) -> Integrator {
+        let mut i = self.clone();
+        i.bdpt.lt_ratio = k;
+        i
+    }
+
+    /// Whether [`Integrator::light_sample`] means anything here (BDPT).
+    pub fn traces_light_paths(&self) -> bool {
+        self.set.kind == IntegratorKind::Bdpt
+    }
+
+    /// One light subpath for light tracing alone (BDPT): its (s, 1) connections go to
+    /// `sink`; no camera sample. Other estimators do nothing.
+    pub fn light_sample<const N: usize>(
+        &self,
+        scene: &Scene,
+        cam: &Camera,
+        s: &mut SampleStream,
+        sink: &mut SplatSink,
+        c: &mut Counters,
+    ) {
+        if self.set.kind == IntegratorKind::Bdpt {
+            let mut to_sink = |p: Vec2, rgb: [f32; 3]| sink.splat(p, rgb);
+            bdpt::light_path_sample::<N>(scene, cam, s, &self.set, &self.bdpt, c, &mut to_sink);
+        }
     }
 
     /// Whether this estimator sends splats (the film then keeps splat and batch sums).

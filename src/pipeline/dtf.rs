@@ -13,13 +13,15 @@
 //! 4. region forming and the error-optimal filter, 5. display C = (C_d n + C_i,f N)/(n + N)
 //!    (both in `filter::dtf`, pure functions of the two films).
 
-use super::render::{render_pass, Counts, Pass, RenderSettings};
+use super::render::{render_light_pass, render_pass, Counts, Pass, RenderSettings};
 use crate::film::{Film, PixelStats};
 use crate::filter::dtf::{
-    allocate_budget_costed, allocate_relative, dtf_filter, top_up, top_up_budget, DtfOutput,
-    DtfParams,
+    allocate_budget_costed, allocate_relative, camera_part, dtf_filter, lt_ratio, plan_light,
+    top_up, top_up_budget, DtfOutput, DtfParams, LightMode, LightPlan,
 };
+use crate::integrator::bdpt::{LtRatio, LT_RATIO_MAX, LT_RATIO_MIN};
 use crate::integrator::{Counters, Integrator};
+use std::sync::Arc;
 use crate::progress::Progress;
 use crate::scene::Scene;
 use std::time::Instant;
@@ -52,6 +54,10 @@ pub struct DtfRun {
     pub phase2_seconds: f64,
     pub filter_seconds: f64,
     pub seconds: f64,
+    /// Over BDPT with `--dtf-light auto`: phase 2's light work and the light paths of
+    /// their own it traced (in `independent`).
+    pub light_plan: Option<LightPlan>,
+    pub light_paths: u64,
 }
 
 impl DtfRun {
@@ -69,6 +75,25 @@ pub struct DtfPass<'a> {
     pub stream: u32,
     pub counts: Counts<'a>,
     pub rays: bool,
+    /// BDPT's K[p] for the MIS weights of phase 2 (`--dtf-light auto`); None = 1.
+    pub lt_ratio: Option<&'a Arc<LtRatio>>,
+    /// If > 0, the pass is this many light paths of their own (numbers `first_index..`,
+    /// `render_light_pass`) instead of camera samples.
+    pub light_paths: u64,
+}
+
+impl<'a> DtfPass<'a> {
+    /// A pass of camera samples.
+    pub fn samples(dependent: bool, stream: u32, counts: Counts<'a>, rays: bool) -> Self {
+        DtfPass {
+            dependent,
+            stream,
+            counts,
+            rays,
+            lt_ratio: None,
+            light_paths: 0,
+        }
+    }
 }
 
 /// What runs DTF's passes: `LocalPasses` here, or anything that splits a pass into
@@ -94,11 +119,27 @@ pub fn run_dtf_pass(
     let integrator = if pass.dependent {
         dep = integrator.for_dependent_phase();
         &dep
+    } else if let Some(k) = pass.lt_ratio {
+        dep = integrator.with_lt_ratio(Some(k.clone()));
+        &dep
     } else {
         integrator
     };
     let mut film = Film::new(set.width, set.height)?;
     let mut rays = vec![0u64; if pass.rays { film.pixels.len() } else { 0 }];
+    if pass.light_paths > 0 {
+        let c = render_light_pass(
+            scene,
+            integrator,
+            &s,
+            pass.stream,
+            first_index as u64,
+            pass.light_paths,
+            &mut film,
+            progress,
+        );
+        return Ok((film, rays, c));
+    }
     let p = Pass {
         scene,
         integrator,
@@ -173,12 +214,8 @@ pub fn render_dtf_with(
     progress.begin("samples", planned);
 
     // Phase of dependent tests: C_d, sigma^2 from n samples sharing random numbers.
-    let (dependent, rays, mut counters) = passes.run(DtfPass {
-        dependent: true,
-        stream: 0,
-        counts: Counts::Uniform(n),
-        rays: true,
-    })?;
+    let (dependent, rays, mut counters) =
+        passes.run(DtfPass::samples(true, 0, Counts::Uniform(n), true))?;
     if rays.len() != pixels || (dependent.width, dependent.height) != (set.width, set.height) {
         return Err(format!(
             "dtf: phase 1 gave {} rays counts for a {}x{} film, {} pixels wanted",
@@ -211,8 +248,36 @@ pub fn render_dtf_with(
     } else {
         0.0
     };
-    let (alloc, rest_spp) = match budget {
-        DtfBudget::RelativeError => (allocate_relative(&dependent, params)?, 0.0),
+    // Over BDPT: light tracing as work of its own (`filter::dtf::light`): a share of phase
+    // 2 for light paths of their own, the camera samples allocated from the camera part's
+    // sigma (more samples in a pixel do not lower its splats' noise).
+    let light_plan = match (budget, params.light) {
+        (DtfBudget::RelativeError, _) | (_, LightMode::Off) => None,
+        _ => {
+            if let Some(f) = params.light_share.filter(|f| !(0.0..=0.95).contains(f)) {
+                return Err(format!(
+                    "--dtf-light-share {f}: must be between 0 and 0.95"
+                ));
+            }
+            plan_light(
+                &dependent,
+                dependent.total_samples(),
+                counters.rays,
+                counters.light_rays,
+                params.light_share.map(f64::from),
+            )
+        }
+    };
+    let camera_film;
+    let alloc_film = if light_plan.is_some() {
+        camera_film = camera_part(&dependent);
+        &camera_film
+    } else {
+        &dependent
+    };
+    let light_share = light_plan.map_or(0.0, |p| p.share);
+    let (alloc, rest_spp, light_paths) = match budget {
+        DtfBudget::RelativeError => (allocate_relative(&dependent, params)?, 0.0, 0),
         DtfBudget::Spp(total) => {
             let rest = total - n as f64;
             if rest < 0.0 {
@@ -221,9 +286,11 @@ pub fn render_dtf_with(
                     n
                 ));
             }
+            let cam = rest * (1.0 - light_share);
             (
-                allocate_budget_costed(&dependent, params, rest * (1.0 - share), cost)?,
-                rest,
+                allocate_budget_costed(alloc_film, params, cam * (1.0 - share), cost)?,
+                cam,
+                light_plan.map_or(0, |p| p.light_paths(rest, pixels)),
             )
         }
         DtfBudget::Time(secs) => {
@@ -231,24 +298,62 @@ pub fn render_dtf_with(
             let rate = (n as f64 * pixels as f64) / phase1_seconds.max(1e-9);
             let left = (secs * 0.98 - phase1_seconds).max(0.0);
             let rest = rate * left / pixels as f64;
+            let cam = rest * (1.0 - light_share);
             (
-                allocate_budget_costed(&dependent, params, rest * (1.0 - share), cost)?,
-                rest,
+                allocate_budget_costed(alloc_film, params, cam * (1.0 - share), cost)?,
+                cam,
+                light_plan.map_or(0, |p| p.light_paths(rest, pixels)),
             )
         }
     };
+    // K[p] = L / (P N[p]) for the MIS weights, from the camera samples each pixel is
+    // expected to take (its first allocation scaled to the whole phase's budget) and the
+    // light paths of the phase (one per camera sample plus those of their own).
+    let k_map = light_plan.map(|_| {
+        let mean = alloc.iter().map(|&a| a as f64).sum::<f64>() / pixels.max(1) as f64;
+        let expected: Vec<f64> = alloc
+            .iter()
+            .map(|&a| {
+                if mean > 0.0 {
+                    a as f64 * rest_spp / mean
+                } else {
+                    rest_spp
+                }
+            })
+            .collect();
+        let l = rest_spp * pixels as f64 + light_paths as f64;
+        Arc::new(LtRatio {
+            width: set.width,
+            height: set.height,
+            k: lt_ratio(&expected, l, LT_RATIO_MIN, LT_RATIO_MAX),
+        })
+    });
 
-    // Phase of independent tests: N[p] samples from a stream independent of phase 1.
+    // Phase of independent tests: the light paths of their own, then N[p] samples, from
+    // streams independent of phase 1.
     let t1 = Instant::now();
+    let light_film = if light_paths > 0 {
+        let (f, _, c) = passes.run(DtfPass {
+            lt_ratio: k_map.as_ref(),
+            light_paths,
+            ..DtfPass::samples(false, LIGHT_STREAM, Counts::Uniform(0), false)
+        })?;
+        counters.add(&c);
+        Some(f)
+    } else {
+        None
+    };
+    let t1c = Instant::now();
     planned += alloc.iter().map(|&a| a as u64).sum::<u64>();
     progress.set_total(planned);
     let (mut independent, _, c2) = passes.run(DtfPass {
-        dependent: false,
-        stream: 1,
-        counts: Counts::PerPixel(&alloc),
-        rays: false,
+        lt_ratio: k_map.as_ref(),
+        ..DtfPass::samples(false, 1, Counts::PerPixel(&alloc), false)
     })?;
     counters.add(&c2);
+    if let Some(f) = &light_film {
+        independent.merge(f);
+    }
 
     // Top-up rounds from the statistics of all samples so far (`filter::dtf::top_up` for
     // eps_r, `top_up_budget` for a budget: one round with what is left); each round on its
@@ -279,7 +384,7 @@ pub fn render_dtf_with(
             DtfBudget::Time(secs) => {
                 // the rate of phase 2 so far, for the time that is left
                 let done = alloc.iter().map(|&a| a as f64).sum::<f64>();
-                let el = t1.elapsed().as_secs_f64();
+                let el = t1c.elapsed().as_secs_f64();
                 let left = (secs * 0.98 - t0.elapsed().as_secs_f64()).max(0.0);
                 let extra_spp = if el > 0.0 {
                     done / el * left / pixels as f64
@@ -295,10 +400,8 @@ pub fn render_dtf_with(
         planned += extra.iter().map(|&a| a as u64).sum::<u64>();
         progress.set_total(planned);
         let (more, _, c) = passes.run(DtfPass {
-            dependent: false,
-            stream: 2 + round,
-            counts: Counts::PerPixel(&extra),
-            rays: false,
+            lt_ratio: k_map.as_ref(),
+            ..DtfPass::samples(false, 2 + round, Counts::PerPixel(&extra), false)
         })?;
         counters.add(&c);
         independent.merge(&more);
@@ -321,8 +424,14 @@ pub fn render_dtf_with(
         phase1_seconds,
         phase2_seconds,
         seconds: t0.elapsed().as_secs_f64(),
+        light_plan,
+        light_paths,
     })
 }
+
+/// The random stream of phase 2's light paths of their own (phase 1 is stream 0, phase 2's
+/// camera samples 1, the top-up rounds 2, 3, ...).
+pub const LIGHT_STREAM: u32 = 64;
 
 /// The statistics a top-up round decides from: pixel p's phase-1 samples and the phase-2
 /// samples of its 8 neighbours, not its own, as if p had its own sample count. A pixel's
@@ -361,11 +470,22 @@ mod tests {
     use crate::render::RenderJob;
 
     fn run(scene_name: &str, res: u32, spp: u32, seed: u64) -> (DtfRun, Vec<[f32; 3]>) {
+        run_with(scene_name, res, spp, seed, |_| {})
+    }
+
+    fn run_with(
+        scene_name: &str,
+        res: u32,
+        spp: u32,
+        seed: u64,
+        f: impl Fn(&mut DtfParams),
+    ) -> (DtfRun, Vec<[f32; 3]>) {
         let scene = crate::scene::load(scene_name).unwrap();
         let mut job = RenderJob::new(scene_name);
         job.integrator = IntegratorKind::Bdpt;
         job.res = Some((res, res));
         job.seed = seed;
+        f(&mut job.dtf);
         let set = job.settings(&scene);
         let integ =
             Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap();
@@ -435,5 +555,60 @@ mod tests {
             (a / b - 1.0).abs() < 0.03,
             "cornell DTF over BDPT mean {a} against plain BDPT {b}"
         );
+    }
+
+    /// Light paths of their own (`--dtf-light auto` with half of phase 2 forced to them):
+    /// traced, counted by the film, and the furnace stays 1; the Cornell box keeps plain
+    /// BDPT's mean; `--dtf-light off` traces none.
+    #[test]
+    fn dtf_over_bdpt_with_light_paths_of_their_own() {
+        let (d, _) = run_with("furnace", 16, 64, 4, |p| p.light_share = Some(0.5));
+        assert!(d.light_paths > 0 && d.light_plan.is_some());
+        let sf = d.independent.splats.as_ref().unwrap();
+        assert_eq!(
+            sf.light_paths,
+            d.independent.total_samples() + d.light_paths,
+            "one light path per camera sample plus those of their own"
+        );
+        let m = mean(&d.out.combined.data);
+        assert!((m - 1.0).abs() < 0.03, "furnace mean {m}");
+        let (d, plain) = run_with("cornell", 24, 64, 5, |p| p.light_share = Some(0.5));
+        let (a, b) = (mean(&d.out.combined.data), mean(&plain));
+        assert!(
+            (a / b - 1.0).abs() < 0.03,
+            "cornell DTF over BDPT with light paths {a} against plain BDPT {b}"
+        );
+        let (d, _) = run_with("furnace", 16, 64, 4, |p| p.light = LightMode::Off);
+        assert!(d.light_paths == 0 && d.light_plan.is_none());
+    }
+
+    /// The light pass gives the same film on 1 and 3 threads, and counts every path.
+    #[test]
+    fn light_pass_is_deterministic() {
+        let scene = crate::scene::load("caustic").unwrap();
+        let mut job = RenderJob::new("caustic");
+        job.integrator = IntegratorKind::Bdpt;
+        job.res = Some((12, 10));
+        let set = job.settings(&scene);
+        let integ =
+            Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap();
+        let go = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut f = Film::new(12, 10).unwrap();
+                render_light_pass(&scene, &integ, &set, LIGHT_STREAM, 7, 5000, &mut f, &Silent);
+                f
+            })
+        };
+        let (a, b) = (go(1), go(3));
+        assert_eq!(a, b);
+        let sf = a.splats.as_ref().unwrap();
+        assert_eq!(sf.light_paths, 5000);
+        assert!(sf.sum.iter().any(|s| s[0] > 0), "no splat landed");
+        // every batch got its share of the paths
+        assert!(sf.batch_paths.iter().all(|&k| k == 625), "{:?}", sf.batch_paths);
     }
 }

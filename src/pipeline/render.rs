@@ -262,6 +262,102 @@ fn pass<const N: usize>(
     counters
 }
 
+/// Light paths traced for light tracing alone (`Integrator::light_sample`, BDPT): paths
+/// `first..first + count` of random stream `stream`. Path m draws its numbers as sample
+/// index m / P of pixel m % P (P the film's pixels) and belongs to batch m mod B of the
+/// film's batch statistics; the film counts each as a light path (its splat image is
+/// sum x P / light paths) without a camera sample. Paths run in parallel in chunks whose
+/// splats are added in path order: the same bits for any thread count.
+#[allow(clippy::too_many_arguments)]
+pub fn render_light_pass(
+    scene: &Scene,
+    integrator: &Integrator,
+    set: &RenderSettings,
+    stream: u32,
+    first: u64,
+    count: u64,
+    film: &mut Film,
+    progress: &dyn Progress,
+) -> Counters {
+    if film.splats.is_none() {
+        let mut f = Film::with_splats(film.width, film.height).expect("same size");
+        f.merge(film);
+        *film = f;
+    }
+    match set.spectral {
+        SpectralMode::Rgb => light_pass::<3>(scene, integrator, set, stream, first, count, film, progress),
+        SpectralMode::Bands8 => light_pass::<8>(scene, integrator, set, stream, first, count, film, progress),
+        SpectralMode::Bands16 => light_pass::<16>(scene, integrator, set, stream, first, count, film, progress),
+    }
+}
+
+/// Light paths per parallel chunk of `render_light_pass`.
+const LIGHT_CHUNK: u64 = 1024;
+
+#[allow(clippy::too_many_arguments)]
+fn light_pass<const N: usize>(
+    scene: &Scene,
+    integrator: &Integrator,
+    set: &RenderSettings,
+    stream: u32,
+    first: u64,
+    count: u64,
+    film: &mut Film,
+    progress: &dyn Progress,
+) -> Counters {
+    let cam = Camera::new(set.camera, set.width, set.height);
+    let pixels = film.pixels.len() as u64;
+    // the batch key of path m: m itself as far as it matters (m mod B)
+    let key = |m: u64| (m % (1u64 << 30)) as u32;
+    let chunks = count.div_ceil(LIGHT_CHUNK);
+    // per chunk: its counters, its splats and the paths it traced (none if the render
+    // was cancelled before it started)
+    let outs: Vec<(Counters, SplatSink, u64)> = (0..chunks)
+        .into_par_iter()
+        .map(|ch| {
+            let mut c = Counters::default();
+            let mut sink = SplatSink::new(set.width, set.height);
+            if progress.cancelled() {
+                return (c, sink, 0);
+            }
+            let a = first + ch * LIGHT_CHUNK;
+            let b = (a + LIGHT_CHUNK).min(first + count);
+            for m in a..b {
+                let mut s = SampleStream::new(
+                    &set.sampler,
+                    stream,
+                    (m % pixels) as u32,
+                    (m / pixels) as u32,
+                );
+                sink.index = key(m);
+                integrator.light_sample::<N>(scene, &cam, &mut s, &mut sink, &mut c);
+            }
+            (c, sink, b - a)
+        })
+        .collect();
+    let mut counters = Counters::default();
+    for (ch, (c, sink, done)) in outs.iter().enumerate() {
+        counters.add(c);
+        let a = first + ch as u64 * LIGHT_CHUNK;
+        if let Some(sf) = film.splats.as_mut() {
+            for m in a..a + done {
+                sf.add_light_path(key(m));
+            }
+        }
+        for sp in &sink.splats {
+            let mut r = Rejections::default();
+            if r.check(&sp.rgb) {
+                if let Some(sf) = film.splats.as_mut() {
+                    sf.add_splat(sp.pixel as usize, sp.index, sp.rgb);
+                }
+            } else {
+                film.rejected.add(&r);
+            }
+        }
+    }
+    counters
+}
+
 /// How much work a plain render does.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Budget {

@@ -30,10 +30,12 @@
 //! - [`Clamp`]: the paper's f^+ = max(f, 0), or the exact non-negative minimiser.
 
 mod alloc;
+mod light;
 mod params;
 mod region;
 
 pub use alloc::*;
+pub use light::*;
 pub use params::*;
 pub use region::*;
 

@@ -202,6 +202,19 @@ pub struct DtfParams {
     /// a 3-sigma bound; smaller values filter less).
     #[arg(long = "dtf-z", default_value_t = 3.0)]
     pub z: f32,
+    /// DTF over BDPT: light tracing as work of its own (auto): phase 2 shares its budget
+    /// between camera samples, allocated per pixel from the variance of the camera
+    /// samples alone, and light subpaths traced for light tracing alone, whose number
+    /// follows phase 1's share of the variance in the splats; the MIS weights count K[p],
+    /// the light paths per camera sample of each pixel. off: one light subpath per camera
+    /// sample, as plain BDPT. No effect on estimators that do not splat.
+    #[arg(long = "dtf-light", value_enum, default_value_t = super::LightMode::Auto)]
+    pub light: super::LightMode,
+    /// DTF over BDPT with --dtf-light auto: the share of phase 2's budget (rays) spent on
+    /// light subpaths for light tracing alone, 0..0.95, instead of the share phase 1's
+    /// statistics suggest.
+    #[arg(long = "dtf-light-share")]
+    pub light_share: Option<f32>,
 }
 
 impl Default for DtfParams {

@@ -230,6 +230,8 @@ fn mis_weights_of_a_path_sum_to_one() {
         for i in (0..n - 1).rev() {
             pl[i] = b[i + 1].pdf(&cam, (i + 2 < n).then(|| &b[i + 2]), &b[i]);
         }
+        // K: light-tracing paths per camera sample (multi-sample MIS, n_i p_i)
+        let lt_k = [1.0f32, 0.3, 4.0][k as usize % 3];
         for heuristic in [MisHeuristic::Balance, MisHeuristic::Power] {
             let e = if heuristic == MisHeuristic::Power {
                 2
@@ -237,7 +239,7 @@ fn mis_weights_of_a_path_sum_to_one() {
                 1
             };
             let explicit = |tt: usize| -> f64 {
-                let mut p = 1.0f64;
+                let mut p = if tt == 1 { lt_k as f64 } else { 1.0f64 };
                 for &q in &pc[1..tt] {
                     p *= q as f64;
                 }
@@ -274,17 +276,27 @@ fn mis_weights_of_a_path_sum_to_one() {
                 } else {
                     None
                 };
-                let w = mis_weight(&scene, &cam, &lp, &cp, sampled.as_ref(), ss, tt, heuristic);
+                let w = mis_weight(
+                    &scene,
+                    &cam,
+                    &lp,
+                    &cp,
+                    sampled.as_ref(),
+                    ss,
+                    tt,
+                    heuristic,
+                    lt_k,
+                );
                 let want = explicit(tt) / total;
                 assert!(
                     (w as f64 - want).abs() < 1e-4,
-                    "path {k} ({n} vertices), strategy ({ss}, {tt}), {heuristic:?}: recurrence {w}, explicit {want}"
+                    "path {k} ({n} vertices), strategy ({ss}, {tt}), {heuristic:?}, K {lt_k}: recurrence {w}, explicit {want}"
                 );
                 sum += w as f64;
             }
             assert!(
                 (sum - 1.0).abs() < 1e-5,
-                "path {k} {heuristic:?}: sum {sum}"
+                "path {k} {heuristic:?} K {lt_k}: sum {sum}"
             );
         }
         checked[n.min(7)] += 1;
@@ -316,9 +328,9 @@ fn furnace_is_one() {
             let set = settings(mode, -1);
             let o = BdptOptions::default();
             let seed = 10 + k as u64;
-            let img = render_bdpt::<3>(&scene, 8, 8, 48, seed, &set, o);
+            let img = render_bdpt::<3>(&scene, 8, 8, 48, seed, &set, o.clone());
             assert_furnace(&img, &format!("{name} rgb {mode:?}"));
-            let img = render_bdpt::<8>(&scene, 8, 8, 48, seed, &set, o);
+            let img = render_bdpt::<8>(&scene, 8, 8, 48, seed, &set, o.clone());
             assert_furnace(&img, &format!("{name} 8 bands {mode:?}"));
             let img = render_bdpt::<16>(&scene, 8, 8, 48, seed, &set, o);
             assert_furnace(&img, &format!("{name} 16 bands {mode:?}"));
@@ -833,7 +845,7 @@ fn shading_normals_seeds() {
     };
     let b = render_path::<3>(&scene, 8, 8, 32768, 2, &set);
     for seed in 10..16 {
-        let a = render_bdpt::<3>(&scene, 8, 8, 2048, seed, &set, lt);
+        let a = render_bdpt::<3>(&scene, 8, 8, 2048, seed, &set, lt.clone());
         let m = render_bdpt::<3>(&scene, 8, 8, 512, seed, &set, BdptOptions::default());
         let z = |a: &Img| {
             (a.img_mean[0] - b.img_mean[0]) / (a.img_se[0].powi(2) + b.img_se[0].powi(2)).sqrt()
@@ -1007,4 +1019,159 @@ fn rough_glass_adjoint() {
         );
     }
     agree_per_pixel_on(&scene, 8, 8, 256);
+}
+
+/// K[p] varying over the image (0.25 .. 8 by pixel): the weights of a path still sum to 1
+/// whatever K, so any K must leave the image unbiased.
+fn uneven_lt_ratio(w: u32, h: u32) -> std::sync::Arc<LtRatio> {
+    std::sync::Arc::new(LtRatio {
+        width: w,
+        height: h,
+        k: (0..w * h).map(|i| 0.25 * (1 << (i % 6)) as f32).collect(),
+    })
+}
+
+/// `render_bdpt` with light paths of their own: pass j gives every pixel one camera sample
+/// (with the MIS weights of `k`) and traces `extra` light paths per pixel for light tracing
+/// alone (`light_path_sample`); every splat of the pass counts 1 / (1 + extra), the film's
+/// splat sum x P / light paths.
+#[allow(clippy::too_many_arguments)]
+fn render_bdpt_lt<const N: usize>(
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    spp: u32,
+    seed: u64,
+    set: &IntegratorSettings,
+    k: std::sync::Arc<LtRatio>,
+    extra: u32,
+    heuristic: MisHeuristic,
+) -> Img {
+    let opts = BdptOptions {
+        heuristic,
+        lt_ratio: Some(k),
+        ..Default::default()
+    };
+    let scale = 1.0 / (1 + extra) as f32;
+    let mut c = Counters::default();
+    render(scene, w, h, spp, seed, |cam, x, y, s, splat| {
+        let mut scaled = |r: Vec2, v: [f32; 3]| splat(r, v.map(|x| x * scale));
+        for e in 0..extra {
+            let mut ls = s.decorrelated(0x11_0000 + e as u64);
+            light_path_sample::<N>(scene, cam, &mut ls, set, &opts, &mut c, &mut scaled);
+        }
+        sample_pixel_with::<N>(scene, cam, x, y, s, set, &opts, &mut c, &mut scaled, None)
+    })
+}
+
+/// Light paths of their own with K in the MIS weights keep the furnace at 1, with K right
+/// (3 light paths per camera sample) or far off (`uneven_lt_ratio`), for both heuristics.
+#[test]
+fn furnace_with_light_paths_of_their_own_is_one() {
+    for name in ["furnace", "furnace-glossy"] {
+        let scene = scene::load(name).unwrap();
+        let set = settings(RrMode::Classic, -1);
+        let right = std::sync::Arc::new(LtRatio {
+            width: 8,
+            height: 8,
+            k: vec![3.0; 64],
+        });
+        for (i, (k, heuristic)) in [
+            (right.clone(), MisHeuristic::Balance),
+            (uneven_lt_ratio(8, 8), MisHeuristic::Balance),
+            (uneven_lt_ratio(8, 8), MisHeuristic::Power),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let img = render_bdpt_lt::<3>(&scene, 8, 8, 48, 30 + i as u64, &set, k, 2, heuristic);
+            assert_furnace(&img, &format!("{name} light paths of their own, case {i}"));
+        }
+    }
+}
+
+/// Per-pixel z-tests of two images (a multiple-comparison bound as `agree_per_pixel_on`)
+/// and their image means within 3 standard errors.
+fn assert_agree(name: &str, a: &Img, b: &Img) {
+    let n = a.mean.len();
+    let tests = (n * 3) as f64;
+    let (mut big, mut worst) = (0, 0.0f64);
+    for i in 0..n {
+        for c in 0..3 {
+            let v = a.var[i][c] + b.var[i][c];
+            let z = if v > 0.0 {
+                (a.mean[i][c] - b.mean[i][c]) / v.sqrt()
+            } else {
+                0.0
+            };
+            worst = worst.max(z.abs());
+            if z.abs() > 3.0 {
+                big += 1;
+            }
+        }
+    }
+    let allowed = (3.0 * 0.0027 * tests) as usize + 2;
+    assert!(
+        big <= allowed && worst < 4.8,
+        "{name}: {big} of {tests} beyond 3 se (allowed {allowed}), worst {worst}"
+    );
+    for c in 0..3 {
+        let z =
+            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
+        assert!(
+            z.abs() < 3.0,
+            "{name} channel {c}: image means {} vs {} (z {z})",
+            a.img_mean[c],
+            b.img_mean[c]
+        );
+    }
+}
+
+/// BDPT with light paths of their own and K in the MIS weights against plain BDPT (another
+/// seed), per pixel: on `cornell` and on `caustic`, whose caustic comes from light tracing.
+#[test]
+fn light_paths_of_their_own_agree_with_plain_bdpt_per_pixel() {
+    let set = settings(RrMode::Classic, -1);
+    for (name, spp) in [("cornell", 64), ("caustic", 96)] {
+        let scene = scene::load(name).unwrap();
+        let (w, h) = (16, 16);
+        let a = render_bdpt_lt::<3>(
+            &scene,
+            w,
+            h,
+            spp,
+            5,
+            &set,
+            uneven_lt_ratio(w, h),
+            2,
+            MisHeuristic::Balance,
+        );
+        let b = render_bdpt::<3>(&scene, w, h, 2 * spp, 6, &set, BdptOptions::default());
+        assert_agree(name, &a, &b);
+    }
+}
+
+/// More light paths with the right K lower light tracing's noise where it carries the
+/// image (the caustic): the image mean's standard error at equal camera samples falls.
+#[test]
+fn light_paths_of_their_own_lower_the_caustics_noise() {
+    let scene = scene::load("caustic").unwrap();
+    let set = settings(RrMode::Classic, -1);
+    let (w, h) = (16, 16);
+    let k = |v: f32| {
+        std::sync::Arc::new(LtRatio {
+            width: w,
+            height: h,
+            k: vec![v; (w * h) as usize],
+        })
+    };
+    let one = render_bdpt_lt::<3>(&scene, w, h, 64, 7, &set, k(1.0), 0, MisHeuristic::Balance);
+    let four = render_bdpt_lt::<3>(&scene, w, h, 64, 7, &set, k(4.0), 3, MisHeuristic::Balance);
+    let var = |a: &Img| a.var.iter().map(|v| v.iter().sum::<f64>()).sum::<f64>();
+    assert!(
+        var(&four) < 0.6 * var(&one),
+        "summed pixel variance: K = 4 {} against K = 1 {}",
+        var(&four),
+        var(&one)
+    );
 }

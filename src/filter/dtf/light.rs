@@ -1,0 +1,154 @@
+//! DTF over an estimator that splats (BDPT): light tracing as work of its own.
+//!
+//! A pixel's value is the mean of its camera samples plus the splat image, whose noise is
+//! set by the light paths of the whole film, not by the pixel's own N: on `caustic` 1% of
+//! the pixels (the caustic and its reflection) held 80% of plain BDPT's squared error, and
+//! DTF's per-pixel allocation could not reach them. Phase 1 (n samples per pixel, one
+//! light subpath each) keeps both parts of every pixel's batch images, so the variance of
+//! each part can be read separately (`SplatFilm::batch_variance_parts`):
+//! - per camera sample, v[p] = n x Var(camera mean) (falls with N[p]);
+//! - per light path per pixel, s[p] = (L1 / P) x Var(splat image) (falls with L / P, L the
+//!   light paths of the whole film).
+//!
+//! Phase 2 then spends a share f of its budget (in rays) on light subpaths traced for light
+//! tracing alone and the rest on camera samples (each with its own light subpath), with f
+//! minimising the model error E(f) = (sum sqrt v)^2 / N_cam + P sum s / L
+//! (N_cam = (1 - f) N0 camera samples allocated by sigma, L = N_cam + f N0 c_cam / c_lt
+//! light paths): [`plan_light`]. The camera samples are shared from the camera part's
+//! sigma alone ([`camera_part`]): more camera samples in a pixel do not lower its splats'
+//! noise.
+
+use crate::film::Film;
+
+/// `--dtf-light`.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum LightMode {
+    /// Light paths of their own, camera samples from the camera part's sigma, MIS with
+    /// each pixel's K.
+    #[default]
+    Auto,
+    /// One light subpath per camera sample, as plain BDPT.
+    Off,
+}
+
+/// The light work of phase 2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightPlan {
+    /// Share of phase 2's budget (rays) for light paths of their own.
+    pub share: f64,
+    /// Rays per camera sample and per light path of its own (estimated from phase 1).
+    pub cost_camera: f64,
+    pub cost_light: f64,
+    /// Phase 1's variance split: sum over pixels of the splat image's variance over the
+    /// whole variance of the values (for `--stats`).
+    pub splat_variance_share: f64,
+}
+
+impl LightPlan {
+    /// Light paths of their own for an average of `spp` phase-2 samples per pixel over
+    /// `pixels` pixels (before the camera samples get their (1 - share)).
+    pub fn light_paths(&self, spp: f64, pixels: usize) -> u64 {
+        let r = self.cost_camera / self.cost_light.max(1e-9);
+        (self.share * spp * pixels as f64 * r).round().max(0.0) as u64
+    }
+}
+
+/// The most of phase 2 light paths of their own may take.
+pub const MAX_LIGHT_SHARE: f64 = 0.95;
+
+/// Phase 2's light work from phase 1 (`dep`, n samples per pixel, one light subpath each)
+/// and its work counters: rays per camera sample `rays / samples`, of which `light_rays`
+/// extended light subpaths. `fixed` overrides the model's share. None when the film does
+/// not splat.
+pub fn plan_light(
+    dep: &Film,
+    samples: u64,
+    rays: u64,
+    light_rays: u64,
+    fixed: Option<f64>,
+) -> Option<LightPlan> {
+    let sf = dep.splats.as_ref()?;
+    let pixels = dep.pixels.len();
+    if samples == 0 || pixels == 0 {
+        return None;
+    }
+    let cost_camera = (rays as f64 / samples as f64).max(1.0);
+    // a light path of its own: its subpath, then about one shadow ray to the camera per
+    // vertex
+    let cost_light = (2.0 * light_rays as f64 / samples as f64).max(1.0);
+    let lights_per_pixel = sf.light_paths as f64 / pixels as f64;
+    let (mut sqrt_v, mut s_sum, mut var_splat, mut var_all) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for i in 0..pixels {
+        let (vc, vs) = sf.batch_variance_parts(i, pixels);
+        let n = dep.pixels[i].n as f64;
+        let v = n * vc.iter().sum::<f64>();
+        let s = lights_per_pixel * vs.iter().sum::<f64>();
+        if v.is_finite() && s.is_finite() {
+            sqrt_v += v.max(0.0).sqrt();
+            s_sum += s.max(0.0);
+            var_splat += vs.iter().sum::<f64>();
+            var_all += vs.iter().sum::<f64>() + vc.iter().sum::<f64>();
+        }
+    }
+    let rho = cost_camera / cost_light;
+    let a = sqrt_v * sqrt_v;
+    let b = pixels as f64 * s_sum;
+    // E(f) N0 = a / (1 - f) + b / (1 - f + f rho)
+    let err = |f: f64| a / (1.0 - f) + b / (1.0 - f + f * rho);
+    let share = match fixed {
+        Some(f) => f.clamp(0.0, MAX_LIGHT_SHARE),
+        None => {
+            let mut best = (err(0.0), 0.0);
+            for k in 1..=95 {
+                let f = k as f64 / 100.0;
+                let e = err(f);
+                if e < best.0 {
+                    best = (e, f);
+                }
+            }
+            best.1
+        }
+    };
+    Some(LightPlan {
+        share,
+        cost_camera,
+        cost_light,
+        splat_variance_share: if var_all > 0.0 {
+            var_splat / var_all
+        } else {
+            0.0
+        },
+    })
+}
+
+/// The film of phase 1 without its splats: what the camera samples' allocation reads
+/// (their sigma is the spread of the pixel's own samples, which more samples there lower).
+pub fn camera_part(dep: &Film) -> Film {
+    Film {
+        width: dep.width,
+        height: dep.height,
+        pixels: dep.pixels.clone(),
+        rejected: dep.rejected,
+        splats: None,
+    }
+}
+
+/// K[p] for the MIS weights of phase 2: the light paths per camera sample in each pixel,
+/// L / (P N[p]), with N[p] the camera samples a pixel is expected to take (`expected`)
+/// and L the light paths of the whole phase, clamped to `lo..=hi`.
+pub fn lt_ratio(expected: &[f64], light_paths: f64, lo: f32, hi: f32) -> Vec<f32> {
+    let p = expected.len().max(1) as f64;
+    expected
+        .iter()
+        .map(|&n| {
+            if n > 0.0 {
+                ((light_paths / (p * n)) as f32).clamp(lo, hi)
+            } else {
+                hi
+            }
+        })
+        .collect()
+}
