@@ -81,11 +81,21 @@ pub enum CdDisplay {
     /// as C_i, so a flat region's display is smooth in both terms. The weights tend to the
     /// primary pixel alone as N grows, and C_d's share n / (n + N) vanishes, so the image
     /// stays asymptotically unbiased.
-    #[default]
     Filtered,
     /// C_d' left out of the display (C = C_i,f where N > 0): phase 1 serves only the
     /// statistics, the allocation and the region forming.
     None,
+    /// C_d' as `Filtered`, weighed by the errors of the two terms instead of by sample
+    /// counts: C = a C_d' + (1 - a) C_i,f with a = V_i / (V_d + V_i), at most the paper's
+    /// n / (n + N). V_i = sum_q f*_q^2 sigma_q^2 / N_q is the filtered C_i's variance
+    /// (phase 2's pixels are independent, so averaging divides it); V_d = (sum_q f*_q
+    /// sigma_q)^2 / n is C_d''s, taken as fully shared by the region (phase 1 gives every
+    /// pixel the same random numbers, so averaging does not divide it). Both use phase 1's
+    /// sigma, which phase 2's samples do not steer. In a flat region a = n / (n + M_eff N)
+    /// with M_eff = 1 / sum f*^2: C_d's weight falls as the region grows, and as N grows
+    /// a <= n / (n + N) vanishes as the paper's does.
+    #[default]
+    Mse,
 }
 
 /// Parameters of DTF (paper §6 names n, eps_r, m_max and Delta f[0]_min as the four
@@ -127,10 +137,12 @@ pub struct DtfParams {
     /// --dtf-cd says.
     #[arg(long = "dtf-paper-display")]
     pub paper_display: bool,
-    /// DTF: how the display takes phase 1's C_d (unless --dtf-paper-display): filtered
-    /// (g C_d averaged with the region's weights f*, as C_i), scaled (the pixel's own g C_d)
-    /// or none (C_i,f alone where N > 0).
-    #[arg(long = "dtf-cd", value_enum, default_value_t = CdDisplay::Filtered)]
+    /// DTF: how the display takes phase 1's C_d (unless --dtf-paper-display): mse (g C_d
+    /// averaged with the region's weights f*, weighed against C_i,f by the two terms'
+    /// variances, C_d's taken as shared by the region, at most n / (n + N)), filtered (the
+    /// same average at the paper's weight n / (n + N)), scaled (the pixel's own g C_d at
+    /// n / (n + N)) or none (C_i,f alone where N > 0).
+    #[arg(long = "dtf-cd", value_enum, default_value_t = CdDisplay::Mse)]
     pub cd_display: CdDisplay,
     /// DTF: distance kernel d: pyramid (the paper's) or gaussian.
     #[arg(long = "dtf-kernel", value_enum, default_value_t = Kernel::Pyramid)]

@@ -325,6 +325,30 @@ impl Dtf {
         }
     }
 
+    /// C_d''s share a of the display C = a C_d' + (1 - a) C_i,f under `CdDisplay::Mse`
+    /// for pixel p with region weights (q, f*_q): a = V_i / (V_d + V_i), at most the
+    /// paper's n / (n + N), with
+    ///   V_i = sum_q f*_q^2 sigma_q^2 / N_q   (phase 2's pixels are independent),
+    ///   V_d = (sum_q f*_q sigma_q / sqrt(n_q))^2   (phase 1's errors shared by the region),
+    /// sigma from phase 1 (not from phase 2's samples, so a pixel whose samples came out
+    /// low is not trusted more for it). Without a usable variance the paper's share.
+    pub(super) fn cd_share(&self, p: usize, region: impl Iterator<Item = (usize, f64)>) -> f64 {
+        let (n, big_n) = (self.n_dep[p] as f64, self.n_ind[p] as f64);
+        let cap = n / (n + big_n);
+        let (mut vi, mut sd) = (0.0, 0.0);
+        for (q, f) in region {
+            let (sg, nq, big_nq) = (self.sigma[q], self.n_dep[q] as f64, self.n_ind[q] as f64);
+            vi += f * f * sg * sg / big_nq;
+            sd += f * sg / nq.sqrt();
+        }
+        let a = vi / (sd * sd + vi);
+        if a.is_finite() {
+            a.min(cap)
+        } else {
+            cap
+        }
+    }
+
     /// Region forming for pixel p = (x, y) (paper §5, third step). On return the first
     /// `s.w.len()` candidates carry the accepted weights f*; returns the accepted m.
     fn region_into(&self, x: usize, y: usize, s: &mut Scratch) -> u32 {
@@ -525,7 +549,7 @@ impl Dtf {
                 };
                 let disp = match mode {
                     CdDisplay::Scaled => combine(scaled(p), self.n_dep[p], c, self.n_ind[p]),
-                    CdDisplay::Filtered => {
+                    CdDisplay::Filtered | CdDisplay::Mse => {
                         let mut cdf = [0.0f64; 3];
                         for (&wq, cq) in s.w.iter().zip(&s.cand) {
                             let v = scaled(cq.idx);
@@ -533,7 +557,13 @@ impl Dtf {
                                 *o += wq * v[ch];
                             }
                         }
-                        combine(cdf, self.n_dep[p], c, self.n_ind[p])
+                        if mode == CdDisplay::Mse && self.n_ind[p] > 0 {
+                            let a =
+                                self.cd_share(p, s.w.iter().zip(&s.cand).map(|(&f, q)| (q.idx, f)));
+                            std::array::from_fn(|ch| a * cdf[ch] + (1.0 - a) * c[ch])
+                        } else {
+                            combine(cdf, self.n_dep[p], c, self.n_ind[p])
+                        }
                     }
                     CdDisplay::None if self.n_ind[p] > 0 => c,
                     CdDisplay::None => combine(scaled(p), self.n_dep[p], c, 0),

@@ -194,6 +194,57 @@ fn setup(
     Dtf::new(&d, &i, &a, params).unwrap()
 }
 
+/// `CdDisplay::Mse`: C_d''s share of the display is V_i / (V_d + V_i) with V_d shared by
+/// the region, which in a flat region is n / (n + M_eff N), M_eff = 1 / sum f*^2: the
+/// paper's n / (n + N) for a lone pixel, less as the region grows.
+#[test]
+fn cd_share_is_the_paper_share_at_the_region_effective_count() {
+    let (n, big_n) = (16u32, 24u32);
+    let flat = |m_max| {
+        setup(
+            9,
+            9,
+            |_, _| px(grey(0.5), grey(0.3), n),
+            |_, _| px(grey(0.5), grey(0.3), big_n),
+            |_, _| big_n,
+            &DtfParams {
+                m_max,
+                ..Default::default()
+            },
+        )
+    };
+    let paper = n as f64 / (n + big_n) as f64;
+    for m_max in [1, 2, 4, 8] {
+        let dtf = flat(m_max);
+        let r = dtf.weights(4, 4);
+        let sum_f2: f64 = r.weights.iter().map(|w| w.2 * w.2).sum();
+        let a = dtf.cd_share(
+            4 * 9 + 4,
+            r.weights
+                .iter()
+                .map(|&(x, y, f)| (y as usize * 9 + x as usize, f)),
+        );
+        let want = n as f64 / (n as f64 + big_n as f64 / sum_f2);
+        assert!((a - want).abs() < 1e-12, "m_max {m_max}: {a} vs {want}");
+        assert!(a <= paper + 1e-15);
+        if m_max == 1 {
+            assert!((a - paper).abs() < 1e-15);
+        } else {
+            assert!(r.m > 1 && a < 0.8 * paper, "m_max {m_max}: m {} a {a}", r.m);
+        }
+    }
+    // Without a usable variance (sigma = 0: no error to weigh) the share is the paper's.
+    let zero = setup(
+        5,
+        5,
+        |_, _| px(grey(0.5), grey(0.0), n),
+        |_, _| px(grey(0.5), grey(0.3), big_n),
+        |_, _| big_n,
+        &DtfParams::default(),
+    );
+    assert!((zero.cd_share(12, [(12usize, 1.0)].into_iter()) - paper).abs() < 1e-15);
+}
+
 #[test]
 fn flat_region_pixel_weights_hand_computed() {
     // Flat C_d: Delta = 0, f = 1/M, f* proportional to the pyramid d = m/sqrt2 - r.
@@ -253,7 +304,7 @@ fn constant_image_passes_unchanged() {
             // window), so (g C_d * 50 + C_i * 20) / 70 = C_i, whether g C_d is filtered
             // (the default), the pixel's own, or left out.
             assert!((out.combined.data[10][0] as f64 - 0.35).abs() < 1e-6);
-            for cd_display in [CdDisplay::Scaled, CdDisplay::None] {
+            for cd_display in [CdDisplay::Scaled, CdDisplay::Filtered, CdDisplay::None] {
                 let p = DtfParams {
                     cd_display,
                     ..params.clone()
