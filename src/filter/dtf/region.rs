@@ -176,6 +176,9 @@ pub struct Dtf {
     ci: Vec<[f64; 3]>,
     /// Actual phase-2 count per pixel.
     n_ind: Vec<u32>,
+    /// N_eff[p] for the filter's and the display's weights (`super::effective_counts`,
+    /// over BDPT with `--dtf-light auto`), else N[p].
+    n_eff: Vec<f64>,
     /// Variance of C_i per channel (phase 2), for the independent guard.
     ci_var: Vec<[f64; 3]>,
     /// Phase 1's batch images per pixel (`DtfParams::dep_noise`; empty without splats or
@@ -209,6 +212,9 @@ impl Dtf {
         } else {
             shared_error_scale(&cd, dep, indep, dep.width as usize, dep.height as usize)
         };
+        // over BDPT with light paths of their own (`super::light`)
+        let n_eff = super::effective_counts(dep, indep)
+            .filter(|_| params.light == super::LightMode::Auto);
         Ok(Dtf {
             params: params.clone(),
             width: dep.width as usize,
@@ -232,6 +238,7 @@ impl Dtf {
                 })
                 .collect(),
             n_ind: indep.pixels.iter().map(|s| s.n).collect(),
+            n_eff: n_eff.unwrap_or_else(|| indep.pixels.iter().map(|s| s.n as f64).collect()),
             ci_var: (0..indep.pixels.len())
                 .into_par_iter()
                 .map(|i| film_variance_of_value(indep, i))
@@ -333,11 +340,11 @@ impl Dtf {
     /// sigma from phase 1 (not from phase 2's samples, so a pixel whose samples came out
     /// low is not trusted more for it). Without a usable variance the paper's share.
     pub(super) fn cd_share(&self, p: usize, region: impl Iterator<Item = (usize, f64)>) -> f64 {
-        let (n, big_n) = (self.n_dep[p] as f64, self.n_ind[p] as f64);
+        let (n, big_n) = (self.n_dep[p] as f64, self.n_eff[p]);
         let cap = n / (n + big_n);
         let (mut vi, mut sd) = (0.0, 0.0);
         for (q, f) in region {
-            let (sg, nq, big_nq) = (self.sigma[q], self.n_dep[q] as f64, self.n_ind[q] as f64);
+            let (sg, nq, big_nq) = (self.sigma[q], self.n_dep[q] as f64, self.n_eff[q]);
             vi += f * f * sg * sg / big_nq;
             sd += f * sg / nq.sqrt();
         }
@@ -389,7 +396,8 @@ impl Dtf {
             return (1, inv_acc);
         }
         let np_stop = self.alloc[p] as f64 * self.params.stop_ratio as f64;
-        let sqrt_n = (big_n as f64).sqrt();
+        // (N_eff: with light paths of their own C_i's noise is below sigma / sqrt(N))
+        let sqrt_n = self.n_eff[p].sqrt();
         let active_set = self.params.clamp == Clamp::ActiveSet;
 
         // Current (clipped, inclusive) window and sum_r Delta_r, both grown incrementally:
