@@ -80,7 +80,12 @@ fn main() {
             }
         }
         let n = e.len() as f64;
-        let mean = |im: &RgbImage| im.data.iter().map(|c| (c[0] + c[1] + c[2]) as f64).sum::<f64>();
+        let mean = |im: &RgbImage| {
+            im.data
+                .iter()
+                .map(|c| (c[0] + c[1] + c[2]) as f64)
+                .sum::<f64>()
+        };
         println!(
             "{name:<10} {secs:6.2} s  mean {:.4}  rmse {:.5}  perc {:.4}  mse bright {:.3e} rest {:.3e}  {extra}",
             mean(im) / mean(&reference),
@@ -91,7 +96,9 @@ fn main() {
         );
     };
     // DTF_LIGHT_DUMP=DIR: 3 x |error| of each image as PNG there (error maps to look at)
-    let dump = std::env::var("DTF_LIGHT_DUMP").ok().map(std::path::PathBuf::from);
+    let dump = std::env::var("DTF_LIGHT_DUMP")
+        .ok()
+        .map(std::path::PathBuf::from);
     let save = |name: &str, im: &RgbImage| {
         if let Some(d) = &dump {
             std::fs::create_dir_all(d).unwrap();
@@ -125,11 +132,24 @@ fn main() {
             x => p.light_share = Some(x.parse().unwrap()),
         }
         let t = std::time::Instant::now();
-        let run = render_dtf(&scene, &integ, &set, &p, DtfBudget::Spp(spp as f64), &Silent).unwrap();
+        let run = render_dtf(
+            &scene,
+            &integ,
+            &set,
+            &p,
+            DtfBudget::Spp(spp as f64),
+            &Silent,
+        )
+        .unwrap();
         let secs = t.elapsed().as_secs_f64();
         let ind = RgbImage::new(set.width, set.height, run.independent.mean_rgb());
         let e_ind = se(&ind);
-        let mean = |im: &RgbImage| im.data.iter().map(|c| (c[0] + c[1] + c[2]) as f64).sum::<f64>();
+        let mean = |im: &RgbImage| {
+            im.data
+                .iter()
+                .map(|c| (c[0] + c[1] + c[2]) as f64)
+                .sum::<f64>()
+        };
         let dep = RgbImage::new(set.width, set.height, run.dependent.mean_rgb());
         let extra = format!(
             "means: dependent {:.4} independent {:.4} filtered {:.4}; N {:.1} light paths/px {:.1} share {:?} costs {:?} (phase-2 film mse top {:.3e} rest {:.3e})",

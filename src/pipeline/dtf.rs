@@ -21,9 +21,9 @@ use crate::filter::dtf::{
 };
 use crate::integrator::bdpt::{LtRatio, LT_RATIO_MAX, LT_RATIO_MIN};
 use crate::integrator::{Counters, Integrator};
-use std::sync::Arc;
 use crate::progress::Progress;
 use crate::scene::Scene;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How the amount of work of phase 2 is set.
@@ -255,9 +255,7 @@ pub fn render_dtf_with(
         (DtfBudget::RelativeError, _) | (_, LightMode::Off) => None,
         _ => {
             if let Some(f) = params.light_share.filter(|f| !(0.0..=0.95).contains(f)) {
-                return Err(format!(
-                    "--dtf-light-share {f}: must be between 0 and 0.95"
-                ));
+                return Err(format!("--dtf-light-share {f}: must be between 0 and 0.95"));
             }
             plan_light(
                 &dependent,
@@ -609,6 +607,10 @@ mod tests {
         assert_eq!(sf.light_paths, 5000);
         assert!(sf.sum.iter().any(|s| s[0] > 0), "no splat landed");
         // every batch got its share of the paths
-        assert!(sf.batch_paths.iter().all(|&k| k == 625), "{:?}", sf.batch_paths);
+        assert!(
+            sf.batch_paths.iter().all(|&k| k == 625),
+            "{:?}",
+            sf.batch_paths
+        );
     }
 }

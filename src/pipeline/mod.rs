@@ -12,5 +12,7 @@ pub use crate::progress::{Progress, Silent};
 pub use dtf::{
     render_dtf, render_dtf_with, run_dtf_pass, DtfBudget, DtfPass, DtfPasses, DtfRun, LocalPasses,
 };
-pub use render::{render, render_light_pass, render_pass, Budget, Counts, Pass, RenderOutput, RenderSettings};
+pub use render::{
+    render, render_light_pass, render_pass, Budget, Counts, Pass, RenderOutput, RenderSettings,
+};
 pub use rw::{render_rw, RwBudget, RwParams, RwRun, RwStats};

@@ -285,9 +285,15 @@ pub fn render_light_pass(
         *film = f;
     }
     match set.spectral {
-        SpectralMode::Rgb => light_pass::<3>(scene, integrator, set, stream, first, count, film, progress),
-        SpectralMode::Bands8 => light_pass::<8>(scene, integrator, set, stream, first, count, film, progress),
-        SpectralMode::Bands16 => light_pass::<16>(scene, integrator, set, stream, first, count, film, progress),
+        SpectralMode::Rgb => {
+            light_pass::<3>(scene, integrator, set, stream, first, count, film, progress)
+        }
+        SpectralMode::Bands8 => {
+            light_pass::<8>(scene, integrator, set, stream, first, count, film, progress)
+        }
+        SpectralMode::Bands16 => {
+            light_pass::<16>(scene, integrator, set, stream, first, count, film, progress)
+        }
     }
 }
 

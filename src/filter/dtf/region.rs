@@ -179,6 +179,9 @@ pub struct Dtf {
     /// N_eff[p] for the filter's and the display's weights (`super::effective_counts`,
     /// over BDPT with `--dtf-light auto`), else N[p].
     n_eff: Vec<f64>,
+    /// sigma for the filter's weights: `sigma`, or with light paths of their own
+    /// `super::smoothed_sigma`.
+    sigma_f: Vec<f64>,
     /// Variance of C_i per channel (phase 2), for the independent guard.
     ci_var: Vec<[f64; 3]>,
     /// Phase 1's batch images per pixel (`DtfParams::dep_noise`; empty without splats or
@@ -213,9 +216,10 @@ impl Dtf {
             shared_error_scale(&cd, dep, indep, dep.width as usize, dep.height as usize)
         };
         // over BDPT with light paths of their own (`super::light`)
-        let n_eff = super::effective_counts(dep, indep)
-            .filter(|_| params.light == super::LightMode::Auto);
-        Ok(Dtf {
+        let n_eff =
+            super::effective_counts(dep, indep).filter(|_| params.light == super::LightMode::Auto);
+        let smooth = n_eff.is_some();
+        let mut d = Dtf {
             params: params.clone(),
             width: dep.width as usize,
             height: dep.height as usize,
@@ -239,6 +243,7 @@ impl Dtf {
                 .collect(),
             n_ind: indep.pixels.iter().map(|s| s.n).collect(),
             n_eff: n_eff.unwrap_or_else(|| indep.pixels.iter().map(|s| s.n as f64).collect()),
+            sigma_f: Vec::new(),
             ci_var: (0..indep.pixels.len())
                 .into_par_iter()
                 .map(|i| film_variance_of_value(indep, i))
@@ -254,7 +259,11 @@ impl Dtf {
                     .collect(),
                 _ => Vec::new(),
             },
-        })
+        };
+        if smooth {
+            d.sigma_f = super::smoothed_sigma(&d.sigma, d.width, d.height);
+        }
+        Ok(d)
     }
 
     /// Region and weights f* of pixel (x, y) (for inspection and tests; [`Dtf::run`] uses
@@ -391,7 +400,7 @@ impl Dtf {
         // sigma = 0: no Monte-Carlo error to trade for bias, so filtering can only hurt
         // (and sqrt(N) / (3 sigma) would divide by zero).
         let big_n = self.n_ind[p];
-        let sg = self.sigma[p];
+        let sg = self.sigma_f.get(p).copied().unwrap_or(self.sigma[p]);
         if big_n == 0 || !(sg > 0.0 && sg.is_finite()) {
             return (1, inv_acc);
         }
