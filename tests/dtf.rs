@@ -141,3 +141,54 @@ fn per_pixel_ray_counts_add_up_to_the_render_counters() {
     // every pixel traced at least its 4 camera rays
     assert!(rays.iter().all(|&r| r >= 4));
 }
+
+/// With eps_r the work is unknown until phase 1 has run: then a line says what phase 2
+/// will cost, and the progress total is phase 1's samples plus that.
+#[test]
+fn relative_error_mode_says_its_predicted_work_after_phase_1() {
+    use kalos::progress::Progress;
+    use std::sync::Mutex;
+    #[derive(Default)]
+    struct Record {
+        messages: Mutex<Vec<String>>,
+        totals: Mutex<Vec<u64>>,
+    }
+    impl Progress for Record {
+        fn set_total(&self, total: u64) {
+            self.totals.lock().unwrap().push(total);
+        }
+        fn message(&self, text: &str) {
+            self.messages.lock().unwrap().push(text.to_string());
+        }
+    }
+    let scene = kalos::scene::load("cornell").unwrap();
+    let set = settings(&scene, 8, 8);
+    let params = DtfParams {
+        n: Some(8),
+        eps_r: Some(0.5),
+        top_up_rounds: 0,
+        ..Default::default()
+    };
+    let rec = Record::default();
+    let run = render_dtf(
+        &scene,
+        &Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap(),
+        &set,
+        &params,
+        DtfBudget::RelativeError,
+        &rec,
+    )
+    .unwrap();
+    let messages = rec.messages.lock().unwrap();
+    let line = messages
+        .iter()
+        .find(|m| m.contains("asks for"))
+        .unwrap_or_else(|| panic!("no predicted-work line in {messages:?}"));
+    // phase 2's samples as the line states them are the samples that were taken
+    let phase2: u64 = run.independent.pixels.iter().map(|p| p.n as u64).sum();
+    assert!(
+        line.contains(&format!("asks for {phase2} more samples")),
+        "{line} (phase 2 took {phase2})"
+    );
+    assert_eq!(rec.totals.lock().unwrap().last(), Some(&(64 * 8 + phase2)));
+}

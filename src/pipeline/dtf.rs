@@ -342,8 +342,21 @@ pub fn render_dtf_with(
         None
     };
     let t1c = Instant::now();
-    planned += alloc.iter().map(|&a| a as u64).sum::<u64>();
+    let phase2_planned = alloc.iter().map(|&a| a as u64).sum::<u64>();
+    planned += phase2_planned;
     progress.set_total(planned);
+    if matches!(budget, DtfBudget::RelativeError) {
+        // The work of an eps_r render is known only now: say it before spending it.
+        let rate = (n as f64 * pixels as f64) / phase1_seconds.max(1e-9);
+        progress.message(&format!(
+            "dtf: phase 1 ({n} samples per pixel, {phase1_seconds:.1} s) asks for {phase2_planned} \
+             more samples ({:.0} per pixel): about {:.0} s at phase 1's rate, then up to {} top-up \
+             rounds for the pixels that still miss eps_r",
+            phase2_planned as f64 / pixels.max(1) as f64,
+            phase2_planned as f64 / rate,
+            params.top_up_rounds
+        ));
+    }
     let (mut independent, _, c2) = passes.run(DtfPass {
         lt_ratio: k_map.as_ref(),
         ..DtfPass::samples(false, 1, Counts::PerPixel(&alloc), false)
