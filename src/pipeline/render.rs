@@ -284,18 +284,33 @@ pub fn render_light_pass(
         f.merge(film);
         *film = f;
     }
-    match set.spectral {
-        SpectralMode::Rgb => {
-            light_pass::<3>(scene, integrator, set, stream, first, count, film, progress)
+    // at most LIGHT_PASS_MAX paths' splats buffered at a time (as camera passes, ~4M)
+    let mut counters = Counters::default();
+    let mut a = first;
+    while a < first + count {
+        let k = LIGHT_PASS_MAX.min(first + count - a);
+        let c = match set.spectral {
+            SpectralMode::Rgb => {
+                light_pass::<3>(scene, integrator, set, stream, a, k, film, progress)
+            }
+            SpectralMode::Bands8 => {
+                light_pass::<8>(scene, integrator, set, stream, a, k, film, progress)
+            }
+            SpectralMode::Bands16 => {
+                light_pass::<16>(scene, integrator, set, stream, a, k, film, progress)
+            }
+        };
+        counters.add(&c);
+        if progress.cancelled() {
+            break;
         }
-        SpectralMode::Bands8 => {
-            light_pass::<8>(scene, integrator, set, stream, first, count, film, progress)
-        }
-        SpectralMode::Bands16 => {
-            light_pass::<16>(scene, integrator, set, stream, first, count, film, progress)
-        }
+        a += k;
     }
+    counters
 }
+
+/// Light paths whose splats `render_light_pass` buffers at a time.
+const LIGHT_PASS_MAX: u64 = 4_000_000;
 
 /// Light paths per parallel chunk of `render_light_pass`.
 const LIGHT_CHUNK: u64 = 1024;
