@@ -113,6 +113,22 @@ fn main() {
             );
             kalos::image_io::write_image(&d.join(format!("err-{name}.png")), &e, 0.0, &[]).unwrap();
             kalos::image_io::write_image(&d.join(format!("{name}.png")), im, 0.0, &[]).unwrap();
+            // pixels more than 5% off, 4x: white; the reference dimmed behind them
+            let (w, h) = (im.width as usize, im.height as usize);
+            let norm = |c: [f32; 3]| (c[0].abs() + c[1].abs() + c[2].abs()) as f64;
+            let mean_n = reference.data.iter().map(|&c| norm(c)).sum::<f64>() / (w * h) as f64;
+            let mut big = vec![[0.0f32; 3]; 16 * w * h];
+            for y in 0..4 * h {
+                for x in 0..4 * w {
+                    let i = (y / 4) * w + x / 4;
+                    let (a, r) = (im.data[i], reference.data[i]);
+                    let off = norm([a[0] - r[0], a[1] - r[1], a[2] - r[2]])
+                        > 0.05 * norm(r).max(0.01 * mean_n);
+                    big[y * 4 * w + x] = if off { [1.0; 3] } else { r.map(|v| 0.3 * v) };
+                }
+            }
+            let b = RgbImage::new(4 * im.width, 4 * im.height, big);
+            kalos::image_io::write_image(&d.join(format!("off-{name}.png")), &b, 0.0, &[]).unwrap();
         }
     };
     save("ref", &reference);
@@ -165,6 +181,24 @@ fn main() {
         );
         let name = format!("{v}/{cd}");
         report(&name, &run.out.combined, secs, extra);
+        {
+            // diagnostic: the perceptual error with the image's mean brought to the reference's
+            let m = mean(&reference) / mean(&run.out.combined);
+            let sc = RgbImage::new(
+                set.width,
+                set.height,
+                run.out
+                    .combined
+                    .data
+                    .iter()
+                    .map(|c| c.map(|v| v * m as f32))
+                    .collect(),
+            );
+            println!(
+                "  rescaled by {m:.4}: perc {:.4}",
+                perceptual_error(&sc, &reference).unwrap().1
+            );
+        }
         save(&format!("dtf-{v}-{cd}"), &run.out.combined);
     }
 }
