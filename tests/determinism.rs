@@ -179,3 +179,27 @@ fn bit_identical_batched_or_not() {
         assert!(images[0].1.iter().any(|p| p[0] > 0.0));
     }
 }
+
+/// DTF over BDPT with light paths of their own (`--dtf-light auto`, half of phase 2 forced
+/// to them): the light pass and the K-weighted phase 2 give the same image on 1 and 3
+/// threads.
+#[test]
+fn dtf_over_bdpt_with_light_paths_is_bit_identical_for_any_thread_count() {
+    let scene = kalos::scene::load("caustic").unwrap();
+    let go = |threads: usize| {
+        let mut job = kalos::render::RenderJob::new("caustic");
+        job.integrator = kalos::integrator::IntegratorKind::Bdpt;
+        job.method = kalos::render::Method::Dtf;
+        job.res = Some((24, 20));
+        job.spp = Some(24);
+        job.threads = Some(threads);
+        job.dtf.light_share = Some(0.5);
+        let r = kalos::render::render_scene(&scene, &job, &kalos::pipeline::Silent).unwrap();
+        assert!(r.dtf.as_ref().unwrap().light_paths > 0);
+        r.image.data
+    };
+    assert!(
+        go(1) == go(3),
+        "DTF over BDPT: images differ with thread count"
+    );
+}
