@@ -248,16 +248,7 @@ fn pass<const N: usize>(
                 sf.add_light_path(sm.index);
             }
         }
-        for sp in &o.sink.splats {
-            let mut r = Rejections::default();
-            if r.check(&sp.rgb) {
-                if let Some(sf) = film.splats.as_mut() {
-                    sf.add_splat(sp.pixel as usize, sp.index, sp.rgb);
-                }
-            } else {
-                film.rejected.add(&r);
-            }
-        }
+        add_splats(film, &o.sink.splats);
     }
     counters
 }
@@ -365,18 +356,23 @@ fn light_pass<const N: usize>(
                 sf.add_light_path(key(m));
             }
         }
-        for sp in &sink.splats {
-            let mut r = Rejections::default();
-            if r.check(&sp.rgb) {
-                if let Some(sf) = film.splats.as_mut() {
-                    sf.add_splat(sp.pixel as usize, sp.index, sp.rgb);
-                }
-            } else {
-                film.rejected.add(&r);
-            }
-        }
+        add_splats(film, &sink.splats);
     }
     counters
+}
+
+/// Adds splats to the film's splat image; non-finite ones are rejected and counted.
+fn add_splats(film: &mut Film, splats: &[Splat]) {
+    for sp in splats {
+        let mut r = Rejections::default();
+        if r.check(&sp.rgb) {
+            if let Some(sf) = film.splats.as_mut() {
+                sf.add_splat(sp.pixel as usize, sp.index, sp.rgb);
+            }
+        } else {
+            film.rejected.add(&r);
+        }
+    }
 }
 
 /// How much work a plain render does.
