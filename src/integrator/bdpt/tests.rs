@@ -415,39 +415,7 @@ fn agree_per_pixel_on(scene: &Scene, w: u32, h: u32, spp: u32) {
     let set = settings(RrMode::Classic, -1);
     let a = render_bdpt::<3>(scene, w, h, spp, 3, &set, BdptOptions::default());
     let b = render_path::<3>(scene, w, h, 16 * spp, 4, &set);
-    let tests = (w * h * 3) as f64;
-    let (mut big, mut worst) = (0, 0.0f64);
-    for i in 0..(w * h) as usize {
-        for c in 0..3 {
-            let v = a.var[i][c] + b.var[i][c];
-            let z = if v > 0.0 {
-                (a.mean[i][c] - b.mean[i][c]) / v.sqrt()
-            } else {
-                0.0
-            };
-            worst = worst.max(z.abs());
-            if z.abs() > 3.0 {
-                big += 1;
-            }
-        }
-    }
-    // 0.27% of the tests beyond 3 sigma by chance (allow 3x that + 2); Bonferroni at 1%
-    // for the worst: 4.4 sigma for 768 tests (allow 4.8).
-    let allowed = (3.0 * 0.0027 * tests) as usize + 2;
-    assert!(
-        big <= allowed && worst < 4.8,
-        "{name}: {big} of {tests} beyond 3 se (allowed {allowed}), worst {worst}"
-    );
-    for c in 0..3 {
-        let z =
-            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
-        assert!(
-            z.abs() < 3.0,
-            "{name} channel {c}: image means {} vs {} (z {z})",
-            a.img_mean[c],
-            b.img_mean[c]
-        );
-    }
+    assert_agree(name, &a, &b);
 }
 
 #[test]
@@ -1090,8 +1058,9 @@ fn furnace_with_light_paths_of_their_own_is_one() {
     }
 }
 
-/// Per-pixel z-tests of two images (a multiple-comparison bound as `agree_per_pixel_on`)
-/// and their image means within 3 standard errors.
+/// Per-pixel z-tests of two images and their image means within 3 standard errors. 0.27%
+/// of the tests land beyond 3 sigma by chance (3x that + 2 are allowed); Bonferroni at 1%
+/// for the worst: 4.4 sigma for 768 tests (4.8 allowed).
 fn assert_agree(name: &str, a: &Img, b: &Img) {
     let n = a.mean.len();
     let tests = (n * 3) as f64;
