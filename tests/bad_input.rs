@@ -232,6 +232,20 @@ fn bad_options_give_one_line_errors_naming_the_option() {
             &["--gather-rays 5000"],
         ),
         (
+            "dtf light share out of range",
+            &[
+                "--method",
+                "dtf",
+                "--integrator",
+                "bdpt",
+                "--spp",
+                "16",
+                "--dtf-light-share",
+                "1.5",
+            ],
+            &["--dtf-light-share 1.5"],
+        ),
+        (
             "radiosity L~ without the estimate roulette",
             &["--rr-estimate", "radiosity"],
             &["--rr-estimate radiosity", "--rr classic"],

@@ -102,28 +102,21 @@ impl SplatFilm {
 
     /// Variance of pixel i's value from the spread of its batch images.
     pub fn batch_variance(&self, i: usize, pixels: usize) -> [f64; 3] {
-        let vals: Vec<[f64; 3]> = (0..BATCHES)
-            .filter_map(|b| self.batch_value(i, b, pixels))
-            .collect();
-        let k = vals.len();
-        if k < 2 {
-            return [0.0; 3];
+        let mut vals = [[0.0; 3]; BATCHES];
+        let mut k = 0;
+        for v in (0..BATCHES).filter_map(|b| self.batch_value(i, b, pixels)) {
+            vals[k] = v;
+            k += 1;
         }
-        let mut out = [0.0; 3];
-        for (c, o) in out.iter_mut().enumerate() {
-            let m = vals.iter().map(|v| v[c]).sum::<f64>() / k as f64;
-            let ss = vals.iter().map(|v| (v[c] - m).powi(2)).sum::<f64>();
-            *o = ss / ((k * (k - 1)) as f64);
-        }
-        out
+        batch_means_variance(&vals[..k])
     }
 
     /// The variance of pixel i's value split in its two parts, each from the spread of
     /// its batch images: (the camera samples' mean, the splat image). The first falls with
     /// the pixel's own samples, the second with the light paths of the whole film.
     pub fn batch_variance_parts(&self, i: usize, pixels: usize) -> ([f64; 3], [f64; 3]) {
-        let mut cam: Vec<[f64; 3]> = Vec::with_capacity(BATCHES);
-        let mut spl: Vec<[f64; 3]> = Vec::with_capacity(BATCHES);
+        let (mut cam, mut spl) = ([[0.0; 3]; BATCHES], [[0.0; 3]; BATCHES]);
+        let mut k = 0;
         for b in 0..BATCHES {
             let n = self.batch_n[i][b];
             if n == 0 || self.batch_paths[b] == 0 {
@@ -131,20 +124,14 @@ impl SplatFilm {
             }
             let km = 1.0 / (n as f64 * FIXED);
             let ks = pixels as f64 / (self.batch_paths[b] as f64 * FIXED);
-            cam.push([0, 1, 2].map(|c| self.batch_sum[i][b][c] as f64 * km));
-            spl.push([0, 1, 2].map(|c| self.batch_splat[i][b][c] as f64 * ks));
+            cam[k] = [0, 1, 2].map(|c| self.batch_sum[i][b][c] as f64 * km);
+            spl[k] = [0, 1, 2].map(|c| self.batch_splat[i][b][c] as f64 * ks);
+            k += 1;
         }
-        let var = |vals: &[[f64; 3]]| {
-            let k = vals.len();
-            if k < 2 {
-                return [0.0; 3];
-            }
-            [0, 1, 2].map(|c| {
-                let m = vals.iter().map(|v| v[c]).sum::<f64>() / k as f64;
-                vals.iter().map(|v| (v[c] - m).powi(2)).sum::<f64>() / (k * (k - 1)) as f64
-            })
-        };
-        (var(&cam), var(&spl))
+        (
+            batch_means_variance(&cam[..k]),
+            batch_means_variance(&spl[..k]),
+        )
     }
 
     /// Add another splat film (exact).
@@ -168,4 +155,18 @@ impl SplatFilm {
             self.batch_paths[b] += o.batch_paths[b];
         }
     }
+}
+
+/// The variance of the mean of k batch images (per channel): their spread / (k (k - 1));
+/// zero with fewer than two.
+fn batch_means_variance(vals: &[[f64; 3]]) -> [f64; 3] {
+    let k = vals.len();
+    if k < 2 {
+        return [0.0; 3];
+    }
+    [0, 1, 2].map(|c| {
+        let m = vals.iter().map(|v| v[c]).sum::<f64>() / k as f64;
+        let ss = vals.iter().map(|v| (v[c] - m).powi(2)).sum::<f64>();
+        ss / ((k * (k - 1)) as f64)
+    })
 }

@@ -253,18 +253,13 @@ pub fn render_dtf_with(
     // sigma (more samples in a pixel do not lower its splats' noise).
     let light_plan = match (budget, params.light) {
         (DtfBudget::RelativeError, _) | (_, LightMode::Off) => None,
-        _ => {
-            if let Some(f) = params.light_share.filter(|f| !(0.0..=0.95).contains(f)) {
-                return Err(format!("--dtf-light-share {f}: must be between 0 and 0.95"));
-            }
-            plan_light(
-                &dependent,
-                dependent.total_samples(),
-                counters.rays,
-                counters.light_rays,
-                params.light_share.map(f64::from),
-            )
-        }
+        _ => plan_light(
+            &dependent,
+            dependent.total_samples(),
+            counters.rays,
+            counters.light_rays,
+            params.light_share.map(f64::from),
+        ),
     };
     let camera_film;
     let alloc_film = if light_plan.is_some() {

@@ -83,7 +83,7 @@ pub fn plan_light(
     light_rays: u64,
     fixed: Option<f64>,
 ) -> Option<LightPlan> {
-    let sf = dep.splats.as_ref()?;
+    dep.splats.as_ref()?;
     let pixels = dep.pixels.len();
     if samples == 0 || pixels == 0 {
         return None;
@@ -93,18 +93,13 @@ pub fn plan_light(
     // those are cheap (an any-hit query, no MIS over s + t strategies), so the path counts
     // LIGHT_PATH_COST rays per subpath ray
     let cost_light = (LIGHT_PATH_COST * light_rays as f64 / samples as f64).max(1.0);
-    let lights_per_pixel = sf.light_paths as f64 / pixels as f64;
     let (mut sqrt_v, mut s_sum, mut var_splat, mut var_all) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for i in 0..pixels {
-        let (vc, vs) = sf.batch_variance_parts(i, pixels);
-        let n = dep.pixels[i].n as f64;
-        let v = n * vc.iter().sum::<f64>();
-        let s = lights_per_pixel * vs.iter().sum::<f64>();
-        if v.is_finite() && s.is_finite() {
-            sqrt_v += v.max(0.0).sqrt();
-            s_sum += s.max(0.0);
-            var_splat += vs.iter().sum::<f64>();
-            var_all += vs.iter().sum::<f64>() + vc.iter().sum::<f64>();
+        if let Some(p) = sample_variances(dep, i) {
+            sqrt_v += p.v.max(0.0).sqrt();
+            s_sum += p.s.max(0.0);
+            var_splat += p.var_splat;
+            var_all += p.var_splat + p.var_camera;
         }
     }
     let rho = cost_camera / cost_light;
@@ -179,25 +174,17 @@ pub fn lt_ratio(expected: &[f64], light_paths: f64, lo: f32, hi: f32) -> Vec<f32
 /// (2 `EFFECTIVE_RADIUS` + 1)^2 window, not from the pixel alone, so that the weights do
 /// not follow a pixel's own noise (8 batches per pixel). None unless both films splat.
 pub fn effective_counts(dep: &Film, indep: &Film) -> Option<Vec<f64>> {
-    let (sd, si) = (dep.splats.as_ref()?, indep.splats.as_ref()?);
+    dep.splats.as_ref()?;
+    let si = indep.splats.as_ref()?;
     let p = dep.pixels.len();
     if p == 0 || si.light_paths == 0 {
         return None;
     }
-    let (l1, l2) = (
-        sd.light_paths as f64 / p as f64,
-        si.light_paths as f64 / p as f64,
-    );
+    let l2 = si.light_paths as f64 / p as f64;
     let (mut v, mut s): (Vec<f64>, Vec<f64>) = (0..p)
-        .map(|i| {
-            let (vc, vs) = sd.batch_variance_parts(i, p);
-            let v = dep.pixels[i].n as f64 * vc.iter().sum::<f64>();
-            let s = l1 * vs.iter().sum::<f64>();
-            if v.is_finite() && s.is_finite() {
-                (v.max(0.0), s.max(0.0))
-            } else {
-                (0.0, 0.0)
-            }
+        .map(|i| match sample_variances(dep, i) {
+            Some(q) => (q.v.max(0.0), q.s.max(0.0)),
+            None => (0.0, 0.0),
         })
         .unzip();
     let (w, h) = (dep.width as usize, dep.height as usize);
@@ -220,6 +207,34 @@ pub fn effective_counts(dep: &Film, indep: &Film) -> Option<Vec<f64>> {
             })
             .collect(),
     )
+}
+
+/// Phase 1's variance of pixel i in its two parts, per sample (module docs).
+struct SampleVariances {
+    /// v[p] = n x Var(camera mean): per camera sample.
+    v: f64,
+    /// s[p] = (L1 / P) x Var(splat image): per light path per pixel.
+    s: f64,
+    /// The two variances of the value, summed over the channels.
+    var_camera: f64,
+    var_splat: f64,
+}
+
+/// [`SampleVariances`] of pixel i of phase 1's film; None without splats or where either
+/// part is not finite.
+fn sample_variances(dep: &Film, i: usize) -> Option<SampleVariances> {
+    let sf = dep.splats.as_ref()?;
+    let pixels = dep.pixels.len();
+    let (vc, vs) = sf.batch_variance_parts(i, pixels);
+    let (var_camera, var_splat) = (vc.iter().sum::<f64>(), vs.iter().sum::<f64>());
+    let v = dep.pixels[i].n as f64 * var_camera;
+    let s = sf.light_paths as f64 / pixels as f64 * var_splat;
+    (v.is_finite() && s.is_finite()).then_some(SampleVariances {
+        v,
+        s,
+        var_camera,
+        var_splat,
+    })
 }
 
 /// Half the side of `effective_counts`'s window.

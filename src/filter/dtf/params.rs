@@ -223,7 +223,7 @@ pub struct DtfParams {
     #[arg(long = "dtf-light", value_enum, default_value_t = super::LightMode::Auto)]
     pub light: super::LightMode,
     /// DTF over BDPT with --dtf-light auto: the share of phase 2's budget (rays) spent on
-    /// light subpaths for light tracing alone, 0..0.95, instead of the share phase 1's
+    /// light subpaths for light tracing alone, 0..0.95 (`MAX_LIGHT_SHARE`), instead of the share phase 1's
     /// statistics suggest.
     #[arg(long = "dtf-light-share")]
     pub light_share: Option<f32>,
@@ -302,6 +302,15 @@ impl DtfParams {
             return Err(format!(
                 "dtf: dep-noise = {}: must be a number >= 0",
                 self.dep_noise
+            ));
+        }
+        if let Some(f) = self
+            .light_share
+            .filter(|f| !(0.0..=super::MAX_LIGHT_SHARE as f32).contains(f))
+        {
+            return Err(format!(
+                "--dtf-light-share {f}: must be between 0 and {}",
+                super::MAX_LIGHT_SHARE
             ));
         }
         if !self.df0_min.is_finite() {
