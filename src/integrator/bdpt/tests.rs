@@ -381,18 +381,7 @@ fn light_tracing_agrees_with_the_path_tracer() {
     let (w, h) = (8, 8);
     let a = render_bdpt::<3>(&scene, w, h, 512, 1, &set, lt);
     let b = render_path::<3>(&scene, w, h, 256, 2, &set);
-    for c in 0..3 {
-        let z =
-            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
-        assert!(
-            z.abs() < 3.0,
-            "channel {c}: light tracing {} +- {}, path {} +- {}",
-            a.img_mean[c],
-            a.img_se[c],
-            b.img_mean[c],
-            b.img_se[c]
-        );
-    }
+    assert_means_agree("light tracing vs path", &a, &b, 3.0);
     for (x0, y0) in [(0, 0), (w / 2, 0), (0, h / 2), (w / 2, h / 2)] {
         let z = region_z(&a, &b, x0, y0, x0 + w / 2, y0 + h / 2);
         assert!(
@@ -583,12 +572,7 @@ fn shading_normals_adjoint() {
     let (w, h) = (8, 8);
     let a = render_bdpt::<3>(&scene, w, h, 2048, 1, &set, lt);
     let b = render_path::<3>(&scene, w, h, 8192, 2, &set);
-    for c in 0..3 {
-        let z =
-            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
-        eprintln!("light tracing vs path, image mean z {z}");
-        assert!(z.abs() < 3.0, "channel {c}: z {z}");
-    }
+    assert_means_agree("light tracing vs path", &a, &b, 3.0);
     let mut zs = Vec::new();
     for (x0, y0) in [(0, 0), (w / 2, 0), (0, h / 2), (w / 2, h / 2)] {
         let z = region_z(&a, &b, x0, y0, x0 + w / 2, y0 + h / 2);
@@ -610,16 +594,7 @@ fn max_depth_limits_the_whole_path() {
     let set = settings(RrMode::Classic, 2);
     let a = render_bdpt::<3>(&scene, 8, 8, 128, 5, &set, BdptOptions::default());
     let b = render_path::<3>(&scene, 8, 8, 128, 6, &set);
-    for c in 0..3 {
-        let z =
-            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
-        assert!(
-            z.abs() < 3.0,
-            "depth 2, channel {c}: {} vs {}",
-            a.img_mean[c],
-            b.img_mean[c]
-        );
-    }
+    assert_means_agree("depth 2", &a, &b, 3.0);
     let set = settings(RrMode::Classic, 1);
     let a = render_bdpt::<3>(&scene, 8, 8, 16, 5, &set, BdptOptions::default());
     let b = render_path::<3>(&scene, 8, 8, 16, 5, &set);
@@ -974,18 +949,7 @@ fn rough_glass_adjoint() {
     let (w, h) = (8, 8);
     let a = render_bdpt::<3>(&scene, w, h, 1024, 1, &set, lt);
     let b = render_path::<3>(&scene, w, h, 4096, 2, &set);
-    for c in 0..3 {
-        let z =
-            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
-        assert!(
-            z.abs() < 3.5,
-            "channel {c}: light tracing {} +- {} vs path {} +- {}",
-            a.img_mean[c],
-            a.img_se[c],
-            b.img_mean[c],
-            b.img_se[c]
-        );
-    }
+    assert_means_agree("light tracing vs path", &a, &b, 3.5);
     agree_per_pixel_on(&scene, 8, 8, 256);
 }
 
@@ -1084,16 +1048,7 @@ fn assert_agree(name: &str, a: &Img, b: &Img) {
         big <= allowed && worst < 4.8,
         "{name}: {big} of {tests} beyond 3 se (allowed {allowed}), worst {worst}"
     );
-    for c in 0..3 {
-        let z =
-            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
-        assert!(
-            z.abs() < 3.0,
-            "{name} channel {c}: image means {} vs {} (z {z})",
-            a.img_mean[c],
-            b.img_mean[c]
-        );
-    }
+    assert_means_agree(name, a, b, 3.0);
 }
 
 /// BDPT with light paths of their own and K in the MIS weights against plain BDPT (another
@@ -1143,4 +1098,20 @@ fn light_paths_of_their_own_lower_the_caustics_noise() {
         var(&four),
         var(&one)
     );
+}
+
+/// The two images' means agree per channel within `z_max` standard errors.
+fn assert_means_agree(what: &str, a: &Img, b: &Img, z_max: f64) {
+    for c in 0..3 {
+        let z =
+            (a.img_mean[c] - b.img_mean[c]) / (a.img_se[c].powi(2) + b.img_se[c].powi(2)).sqrt();
+        assert!(
+            z.abs() < z_max,
+            "{what}, channel {c}: image means {} +- {} vs {} +- {} (z {z})",
+            a.img_mean[c],
+            a.img_se[c],
+            b.img_mean[c],
+            b.img_se[c]
+        );
+    }
 }
