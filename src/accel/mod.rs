@@ -357,9 +357,9 @@ const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::E
 /// Per-ray precomputation for the slab and triangle tests.
 #[derive(Clone, Copy)]
 struct RayData {
-    /// Origin and (fixed) reciprocal direction, for the 8-wide AVX2 slab test.
-    o: Vec3,
-    inv: Vec3,
+    /// Origin, direction and (fixed) reciprocal direction, each component splatted over
+    /// four lanes (the 8-wide AVX2 slab test doubles them: reading them back as
+    /// written, whole, keeps the loads out of store-forwarding stalls).
     ox: Vec4,
     oy: Vec4,
     oz: Vec4,
@@ -391,8 +391,6 @@ impl RayData {
         };
         let inv = Vec3::new(fix(inv.x), fix(inv.y), fix(inv.z));
         RayData {
-            o: ray.o,
-            inv,
             ox: Vec4::splat(ray.o.x),
             oy: Vec4::splat(ray.o.y),
             oz: Vec4::splat(ray.o.z),
@@ -485,16 +483,12 @@ impl RayData {
                 _mm256_load_ps(b.add(WIDTH * fz)),
             )
         };
-        let (ox, oy, oz) = (
-            _mm256_set1_ps(self.o.x),
-            _mm256_set1_ps(self.o.y),
-            _mm256_set1_ps(self.o.z),
-        );
-        let (ix, iy, iz) = (
-            _mm256_set1_ps(self.inv.x),
-            _mm256_set1_ps(self.inv.y),
-            _mm256_set1_ps(self.inv.z),
-        );
+        let w = |v: Vec4| {
+            let v: __m128 = v.into();
+            _mm256_set_m128(v, v)
+        };
+        let (ox, oy, oz) = (w(self.ox), w(self.oy), w(self.oz));
+        let (ix, iy, iz) = (w(self.ix), w(self.iy), w(self.iz));
         let x0 = _mm256_mul_ps(_mm256_sub_ps(bnx, ox), ix);
         let y0 = _mm256_mul_ps(_mm256_sub_ps(bny, oy), iy);
         let z0 = _mm256_mul_ps(_mm256_sub_ps(bnz, oz), iz);
