@@ -13,14 +13,17 @@
 //! 4. region forming and the error-optimal filter, 5. display C = (C_d n + C_i,f N)/(n + N)
 //!    (both in `filter::dtf`, pure functions of the two films).
 
-use super::render::{render_light_pass, render_pass, Counts, Pass, RenderSettings};
+use super::render::{
+    render_light_pass, render_pass, render_pass_rest, Counts, Pass, RenderSettings,
+};
 use crate::film::{Film, PixelStats};
 use crate::filter::dtf::{
-    allocate_budget_costed, allocate_relative, camera_part, dtf_filter, lt_ratio, plan_light,
-    top_up, top_up_budget, DtfOutput, DtfParams, LightMode, LightPlan,
+    allocate_budget_costed, allocate_relative, camera_part, direct_mean, dtf_filter, lt_ratio,
+    plan_light, rest_film, top_up, top_up_budget, DirectMode, DtfOutput, DtfParams, LightMode,
+    LightPlan,
 };
 use crate::integrator::bdpt::{LtRatio, LT_RATIO_MAX, LT_RATIO_MIN};
-use crate::integrator::{Counters, Integrator};
+use crate::integrator::{Counters, Integrator, IntegratorKind};
 use crate::progress::Progress;
 use crate::scene::Scene;
 use std::sync::Arc;
@@ -58,6 +61,9 @@ pub struct DtfRun {
     /// their own it traced (in `independent`).
     pub light_plan: Option<LightPlan>,
     pub light_paths: u64,
+    /// With `DirectMode::Split` (over BDPT): mean(E), the emission seen directly per
+    /// pixel, which the display added to the filtered rest (`filter::dtf::direct`).
+    pub direct: Option<Vec<[f64; 3]>>,
 }
 
 impl DtfRun {
@@ -80,6 +86,10 @@ pub struct DtfPass<'a> {
     /// If > 0, the pass is this many light paths of their own (numbers `first_index..`,
     /// `render_light_pass`) instead of camera samples.
     pub light_paths: u64,
+    /// Also write the samples less their emission seen directly to a second film
+    /// (`render_pass_rest`, `DirectMode::Split`); the pass then runs through
+    /// [`DtfPasses::run_rest`].
+    pub rest: bool,
 }
 
 impl<'a> DtfPass<'a> {
@@ -92,6 +102,7 @@ impl<'a> DtfPass<'a> {
             rays,
             lt_ratio: None,
             light_paths: 0,
+            rest: false,
         }
     }
 }
@@ -101,6 +112,17 @@ impl<'a> DtfPass<'a> {
 /// Returns the pass's film, rays per pixel (empty unless asked) and counters.
 pub trait DtfPasses {
     fn run(&mut self, pass: DtfPass<'_>) -> Result<(Film, Vec<u64>, Counters), String>;
+
+    /// A pass with `rest` set: its film and the film of its samples less their emission
+    /// seen directly (`render_pass_rest`). Runners that cannot split refuse.
+    fn run_rest(
+        &mut self,
+        pass: DtfPass<'_>,
+    ) -> Result<(Film, Film, Vec<u64>, Counters), String> {
+        let _ = pass;
+        Err("dtf over bdpt: the emission seen directly kept out of the filter              (--dtf-direct split) is not distributed yet; pass dtf_direct=\"filter\""
+            .into())
+    }
 }
 
 /// Samples `first_index..first_index + count` of every pixel of a DTF pass, rendered here
@@ -153,6 +175,52 @@ pub fn run_dtf_pass(
     Ok((film, rays, c))
 }
 
+/// [`run_dtf_pass`] of a pass with `rest` set: also the film of its samples less their
+/// emission seen directly (`render_pass_rest`).
+pub fn run_dtf_pass_rest(
+    scene: &Scene,
+    integrator: &Integrator,
+    set: &RenderSettings,
+    pass: &DtfPass<'_>,
+    first_index: u32,
+    progress: &dyn Progress,
+) -> Result<(Film, Film, Vec<u64>, Counters), String> {
+    if pass.light_paths > 0 || !integrator.splits_direct() {
+        return Err("dtf: a rest film is for camera passes of BDPT".into());
+    }
+    let mut s = *set;
+    s.sampler.dependent = pass.dependent;
+    let dep;
+    let integrator = if pass.dependent {
+        dep = integrator.for_dependent_phase();
+        &dep
+    } else if let Some(k) = pass.lt_ratio {
+        dep = integrator.with_lt_ratio(Some(k.clone()));
+        &dep
+    } else {
+        integrator
+    };
+    let mut film = Film::new(set.width, set.height)?;
+    let mut rest = Film::new(set.width, set.height)?;
+    let mut rays = vec![0u64; if pass.rays { film.pixels.len() } else { 0 }];
+    let p = Pass {
+        scene,
+        integrator,
+        set: &s,
+        counts: pass.counts,
+        first_index,
+        stream: pass.stream,
+        progress,
+    };
+    let c = render_pass_rest(
+        &p,
+        &mut film,
+        &mut rest,
+        pass.rays.then_some(&mut rays[..]),
+    );
+    Ok((film, rest, rays, c))
+}
+
 /// DTF's passes rendered in this process.
 pub struct LocalPasses<'a> {
     pub scene: &'a Scene,
@@ -164,6 +232,20 @@ pub struct LocalPasses<'a> {
 impl DtfPasses for LocalPasses<'_> {
     fn run(&mut self, pass: DtfPass<'_>) -> Result<(Film, Vec<u64>, Counters), String> {
         run_dtf_pass(
+            self.scene,
+            self.integrator,
+            self.set,
+            &pass,
+            0,
+            self.progress,
+        )
+    }
+
+    fn run_rest(
+        &mut self,
+        pass: DtfPass<'_>,
+    ) -> Result<(Film, Film, Vec<u64>, Counters), String> {
+        run_dtf_pass_rest(
             self.scene,
             self.integrator,
             self.set,
@@ -213,9 +295,16 @@ pub fn render_dtf_with(
     let mut planned = n as u64 * pixels as u64;
     progress.begin("samples", planned);
 
+    // Over BDPT the emission seen directly goes round the filter (`DirectMode::Split`):
+    // every camera pass also writes its samples less that emission to a rest film.
+    let split = params.direct == DirectMode::Split && set.integrator.kind == IntegratorKind::Bdpt;
+
     // Phase of dependent tests: C_d, sigma^2 from n samples sharing random numbers.
-    let (dependent, rays, mut counters) =
-        passes.run(DtfPass::samples(true, 0, Counts::Uniform(n), true))?;
+    let (dependent, dep_rest, rays, mut counters) = camera_pass(
+        passes,
+        split,
+        DtfPass::samples(true, 0, Counts::Uniform(n), true),
+    )?;
     if rays.len() != pixels || (dependent.width, dependent.height) != (set.width, set.height) {
         return Err(format!(
             "dtf: phase 1 gave {} rays counts for a {}x{} film, {} pixels wanted",
@@ -352,10 +441,14 @@ pub fn render_dtf_with(
             params.top_up_rounds
         ));
     }
-    let (mut independent, _, c2) = passes.run(DtfPass {
-        lt_ratio: k_map.as_ref(),
-        ..DtfPass::samples(false, 1, Counts::PerPixel(&alloc), false)
-    })?;
+    let (mut independent, mut ind_rest, _, c2) = camera_pass(
+        passes,
+        split,
+        DtfPass {
+            lt_ratio: k_map.as_ref(),
+            ..DtfPass::samples(false, 1, Counts::PerPixel(&alloc), false)
+        },
+    )?;
     counters.add(&c2);
     if let Some(f) = &light_film {
         independent.merge(f);
@@ -405,18 +498,39 @@ pub fn render_dtf_with(
         }
         planned += extra.iter().map(|&a| a as u64).sum::<u64>();
         progress.set_total(planned);
-        let (more, _, c) = passes.run(DtfPass {
-            lt_ratio: k_map.as_ref(),
-            ..DtfPass::samples(false, 2 + round, Counts::PerPixel(&extra), false)
-        })?;
+        let (more, more_rest, _, c) = camera_pass(
+            passes,
+            split,
+            DtfPass {
+                lt_ratio: k_map.as_ref(),
+                ..DtfPass::samples(false, 2 + round, Counts::PerPixel(&extra), false)
+            },
+        )?;
         counters.add(&c);
         independent.merge(&more);
+        if let (Some(r), Some(m)) = (ind_rest.as_mut(), &more_rest) {
+            r.merge(m);
+        }
         alloc.iter_mut().zip(&extra).for_each(|(a, &e)| *a += e);
     }
     let phase2_seconds = t1.elapsed().as_secs_f64();
 
-    // Region forming, filtering and display.
-    let out = dtf_filter(&dependent, &independent, &classes, params)?;
+    // Region forming, filtering and display; with the split, of the rest R = L - E, and
+    // E added back per pixel (`filter::dtf::direct`).
+    let (out, direct) = match (&dep_rest, &ind_rest) {
+        (Some(dr), Some(ir)) => {
+            let (d, i) = (rest_film(&dependent, dr)?, rest_film(&independent, ir)?);
+            let mut out = dtf_filter(&d, &i, &classes, params)?;
+            let e = direct_mean(&[(&dependent, dr), (&independent, ir)], pixels);
+            for (c, e) in out.combined.data.iter_mut().zip(&e) {
+                for ch in 0..3 {
+                    c[ch] = (c[ch] as f64 + e[ch]) as f32;
+                }
+            }
+            (out, Some(e))
+        }
+        _ => (dtf_filter(&dependent, &independent, &classes, params)?, None),
+    };
     progress.finish();
     Ok(DtfRun {
         n,
@@ -432,7 +546,26 @@ pub fn render_dtf_with(
         seconds: t0.elapsed().as_secs_f64(),
         light_plan,
         light_paths,
+        direct,
     })
+}
+
+/// A camera pass of DTF: its film, with `split` also its rest film (`DtfPasses::run_rest`),
+/// rays per pixel and counters.
+type CameraPass = (Film, Option<Film>, Vec<u64>, Counters);
+
+fn camera_pass(
+    passes: &mut dyn DtfPasses,
+    split: bool,
+    pass: DtfPass<'_>,
+) -> Result<CameraPass, String> {
+    if split {
+        let (f, r, rays, c) = passes.run_rest(DtfPass { rest: true, ..pass })?;
+        Ok((f, Some(r), rays, c))
+    } else {
+        let (f, rays, c) = passes.run(pass)?;
+        Ok((f, None, rays, c))
+    }
 }
 
 /// The random stream of phase 2's light paths of their own (phase 1 is stream 0, phase 2's

@@ -98,6 +98,25 @@ pub enum CdDisplay {
     Mse,
 }
 
+/// What DTF does with the emission seen directly (`--dtf-direct`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum DirectMode {
+    /// The emission seen directly (an emitter at the first camera vertex, or reached from
+    /// it through mirrors and smooth glass only) is kept out of the tests, the regions and
+    /// the filter, and added back per pixel as the mean of all its samples, both phases:
+    /// C = DTF(L - E) + mean(E). A pixel half covering a light varies only because its
+    /// footprint straddles the light's edge; that is image structure, not noise, and
+    /// averaging it with the ceiling beside it is bias. Each part is an unbiased estimate
+    /// of its own, so the sum stays (asymptotically) unbiased as the paper's display
+    /// does. Only over an estimator that splits the term off without extra rays (BDPT,
+    /// its s = 0 strategies); the path tracer is unchanged.
+    #[default]
+    Split,
+    /// Everything filtered together, as the paper does.
+    Filter,
+}
+
 /// Parameters of DTF (paper §6 names n, eps_r, m_max and Delta f[0]_min as the four
 /// critical ones). Each option's name, help and default are written here once: the CLI
 /// flattens this struct, `Default` parses an empty command line, serde reads the same.
@@ -227,6 +246,11 @@ pub struct DtfParams {
     /// statistics suggest.
     #[arg(long = "dtf-light-share")]
     pub light_share: Option<f32>,
+    /// DTF over BDPT: split (emission seen directly, through mirrors and glass at most,
+    /// kept out of the filter and added back per pixel unfiltered) or filter (the paper's:
+    /// filtered with the rest). No effect on the path tracer.
+    #[arg(long = "dtf-direct", value_enum, default_value_t = DirectMode::Split)]
+    pub direct: DirectMode,
 }
 
 impl Default for DtfParams {
