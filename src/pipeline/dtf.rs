@@ -721,6 +721,104 @@ mod tests {
         assert!(d.light_paths == 0 && d.light_plan.is_none());
     }
 
+    /// `--dtf-direct split`'s passes: the whole film is the plain pass's, bit for bit (the
+    /// split changes no sample); the rest film holds the same samples less the emission
+    /// seen directly E, so E = mean(whole) - mean(rest) is exactly 0 in every pixel none
+    /// of whose camera rays reaches an emitter through mirrors and glass
+    /// (`visible::emission` of the same jittered rays), and the light's pixels carry it.
+    /// On `caustic` too (glass: the Dirac chains).
+    #[test]
+    fn rest_pass_splits_off_exactly_the_emission_seen_directly() {
+        for scene_name in ["cornell", "caustic"] {
+            let scene = crate::scene::load(scene_name).unwrap();
+            let mut job = RenderJob::new(scene_name);
+            job.integrator = IntegratorKind::Bdpt;
+            job.res = Some((20, 20));
+            job.seed = 3;
+            let set = job.settings(&scene);
+            let integ =
+                Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent)
+                    .unwrap();
+            let spp = 6;
+            let pass = Pass {
+                scene: &scene,
+                integrator: &integ,
+                set: &set,
+                counts: Counts::Uniform(spp),
+                first_index: 0,
+                stream: 1,
+                progress: &Silent,
+            };
+            let mut plain = Film::new(20, 20).unwrap();
+            render_pass(&pass, &mut plain, None);
+            let (mut whole, mut rest) = (Film::new(20, 20).unwrap(), Film::new(20, 20).unwrap());
+            render_pass_rest(&pass, &mut whole, &mut rest, None);
+            assert_eq!(plain, whole, "{scene_name}: the rest pass changed the film");
+            let cam = crate::scene::Camera::new(set.camera, set.width, set.height);
+            let (mut lit, mut dark) = (0, 0);
+            for i in 0..400u32 {
+                let (x, y) = (i % 20, i / 20);
+                let seen = (0..spp).any(|k| {
+                    let mut st = crate::sampling::SampleStream::new(&set.sampler, 1, i, k);
+                    let ray = crate::integrator::camera_ray(&cam, x, y, &mut st);
+                    let mut c = Counters::default();
+                    let f = crate::integrator::visible::emission::<3>(
+                        &scene,
+                        ray,
+                        set.integrator.max_segments(),
+                        &mut c,
+                    );
+                    !f.is_black()
+                });
+                let (a, b) = (&whole.pixels[i as usize], &rest.pixels[i as usize]);
+                assert_eq!(a.n, b.n);
+                if !seen {
+                    assert_eq!(a.sum, b.sum, "{scene_name} ({x}, {y}): E where no light is seen");
+                    dark += 1;
+                } else if (0..3).all(|c| a.sum[c] > b.sum[c]) {
+                    lit += 1;
+                }
+            }
+            // (the caustic's light shows only in a few pixels of the sphere at this size)
+            assert!(dark > 0 && (lit > 0 || scene_name == "caustic"), "{scene_name}: lit {lit}, dark {dark}");
+        }
+    }
+
+    /// DTF over BDPT adds E back once, unfiltered: over the pixels that see the light
+    /// directly, its mean is plain BDPT's (another seed) within 3.5 standard errors of the
+    /// difference; with E dropped or counted twice it is off by tens of them.
+    #[test]
+    fn dtf_over_bdpt_keeps_the_light_seen_directly() {
+        let (d, _) = run("cornell", 24, 64, 7);
+        let e = d.direct.as_ref().expect("split by default over BDPT");
+        let mask: Vec<usize> = (0..e.len()).filter(|&i| e[i][0] > 1.0).collect();
+        assert!(mask.len() >= 4, "{} light pixels", mask.len());
+        let scene = crate::scene::load("cornell").unwrap();
+        let mut job = RenderJob::new("cornell");
+        job.integrator = IntegratorKind::Bdpt;
+        job.res = Some((24, 24));
+        job.seed = 8;
+        let set = job.settings(&scene);
+        let integ =
+            Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap();
+        let pl = super::super::render::render(
+            &scene,
+            &integ,
+            &set,
+            super::super::render::Budget::Spp(64),
+            0,
+            &Silent,
+        )
+        .unwrap();
+        let sum = |img: &[[f32; 3]]| mask.iter().map(|&i| img[i][0] as f64).sum::<f64>();
+        let (a, b) = (sum(&d.out.combined.data), sum(&pl.film.mean_rgb()));
+        // the two renders' variances over the mask: plain's from its batches, DTF's E from
+        // at least as many samples per pixel (its light pixels get more)
+        let var: f64 = mask.iter().map(|&i| pl.film.variance_of_value(i)[0]).sum();
+        let z = (a - b) / (2.0 * var).sqrt();
+        assert!(z.abs() < 3.5, "light pixels: DTF {a} against plain {b}, z = {z}");
+    }
+
     /// The light pass gives the same film on 1 and 3 threads, and counts every path.
     #[test]
     fn light_pass_is_deterministic() {
