@@ -115,10 +115,7 @@ pub trait DtfPasses {
 
     /// A pass with `rest` set: its film and the film of its samples less their emission
     /// seen directly (`render_pass_rest`). Runners that cannot split refuse.
-    fn run_rest(
-        &mut self,
-        pass: DtfPass<'_>,
-    ) -> Result<(Film, Film, Vec<u64>, Counters), String> {
+    fn run_rest(&mut self, pass: DtfPass<'_>) -> Result<(Film, Film, Vec<u64>, Counters), String> {
         let _ = pass;
         Err("dtf over bdpt: the emission seen directly kept out of the filter              (--dtf-direct split) is not distributed yet; pass dtf_direct=\"filter\""
             .into())
@@ -212,12 +209,7 @@ pub fn run_dtf_pass_rest(
         stream: pass.stream,
         progress,
     };
-    let c = render_pass_rest(
-        &p,
-        &mut film,
-        &mut rest,
-        pass.rays.then_some(&mut rays[..]),
-    );
+    let c = render_pass_rest(&p, &mut film, &mut rest, pass.rays.then_some(&mut rays[..]));
     Ok((film, rest, rays, c))
 }
 
@@ -241,10 +233,7 @@ impl DtfPasses for LocalPasses<'_> {
         )
     }
 
-    fn run_rest(
-        &mut self,
-        pass: DtfPass<'_>,
-    ) -> Result<(Film, Film, Vec<u64>, Counters), String> {
+    fn run_rest(&mut self, pass: DtfPass<'_>) -> Result<(Film, Film, Vec<u64>, Counters), String> {
         run_dtf_pass_rest(
             self.scene,
             self.integrator,
@@ -529,7 +518,10 @@ pub fn render_dtf_with(
             }
             (out, Some(e))
         }
-        _ => (dtf_filter(&dependent, &independent, &classes, params)?, None),
+        _ => (
+            dtf_filter(&dependent, &independent, &classes, params)?,
+            None,
+        ),
     };
     progress.finish();
     Ok(DtfRun {
@@ -737,8 +729,7 @@ mod tests {
             job.seed = 3;
             let set = job.settings(&scene);
             let integ =
-                Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent)
-                    .unwrap();
+                Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap();
             let spp = 6;
             let pass = Pass {
                 scene: &scene,
@@ -773,14 +764,20 @@ mod tests {
                 let (a, b) = (&whole.pixels[i as usize], &rest.pixels[i as usize]);
                 assert_eq!(a.n, b.n);
                 if !seen {
-                    assert_eq!(a.sum, b.sum, "{scene_name} ({x}, {y}): E where no light is seen");
+                    assert_eq!(
+                        a.sum, b.sum,
+                        "{scene_name} ({x}, {y}): E where no light is seen"
+                    );
                     dark += 1;
                 } else if (0..3).all(|c| a.sum[c] > b.sum[c]) {
                     lit += 1;
                 }
             }
             // (the caustic's light shows only in a few pixels of the sphere at this size)
-            assert!(dark > 0 && (lit > 0 || scene_name == "caustic"), "{scene_name}: lit {lit}, dark {dark}");
+            assert!(
+                dark > 0 && (lit > 0 || scene_name == "caustic"),
+                "{scene_name}: lit {lit}, dark {dark}"
+            );
         }
     }
 
@@ -816,7 +813,10 @@ mod tests {
         // at least as many samples per pixel (its light pixels get more)
         let var: f64 = mask.iter().map(|&i| pl.film.variance_of_value(i)[0]).sum();
         let z = (a - b) / (2.0 * var).sqrt();
-        assert!(z.abs() < 3.5, "light pixels: DTF {a} against plain {b}, z = {z}");
+        assert!(
+            z.abs() < 3.5,
+            "light pixels: DTF {a} against plain {b}, z = {z}"
+        );
     }
 
     /// The light pass gives the same film on 1 and 3 threads, and counts every path.

@@ -23,7 +23,11 @@ use crate::film::Film;
 /// rejections. Batch sums and counts come from `rest`, so the batch images are R's.
 pub fn rest_film(full: &Film, rest: &Film) -> Result<Film, String> {
     if full.pixels.len() != rest.pixels.len()
-        || full.pixels.iter().zip(&rest.pixels).any(|(a, b)| a.n != b.n)
+        || full
+            .pixels
+            .iter()
+            .zip(&rest.pixels)
+            .any(|(a, b)| a.n != b.n)
     {
         return Err("dtf: the rest film does not hold the whole film's samples".into());
     }

@@ -317,7 +317,7 @@ impl DtfParams {
         }
         if let Some(r) = self.stop_ratio.filter(|r| !(r.is_finite() && *r >= 1.0)) {
             return Err(format!(
-                "dtf: stop ratio = {r}: must be a number >= 1 (1 is the paper's rule)"
+                "--dtf-stop-ratio {r}: must be a number >= 1 (1 is the paper's rule)"
             ));
         }
         if !(0.0..=1.0).contains(&self.top_up_share) {

@@ -447,7 +447,9 @@ fn weights_non_negative_and_normalised_everywhere() {
                         assert!((-off..=r.m as i64 - 1 - off).contains(&dx));
                         assert!((-off..=r.m as i64 - 1 - off).contains(&dy));
                         assert!(
-                            alloc(qx, qy) as f64 <= alloc(x, y) as f64 * params.stop_ratio.map_or(f64::INFINITY, f64::from)
+                            alloc(qx, qy) as f64
+                                <= alloc(x, y) as f64
+                                    * params.stop_ratio.map_or(f64::INFINITY, f64::from)
                         );
                     }
                     sizes[r.m as usize] += 1;
