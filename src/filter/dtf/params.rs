@@ -217,8 +217,8 @@ pub struct DtfParams {
     /// pixel's own (1 = the paper's rule "N[p] < N[q]"; without it, the default, no such
     /// stop).
     /// Measured without it (README): over BDPT the caustic's image mean at 64 spp went from
-    /// 0.964-0.973 of the reference to 0.99-1.00 and its pixels more than 5% off from 81% to
-    /// 73%; cornell (path tracing, 64 spp) lost 1 point of them. sigma from n samples is
+    /// 0.964-0.973 of the reference to 0.988-0.997 (seeds 1-2) and its pixels more than 5%
+    /// off from 81% to 73%; cornell (path tracing, 64 spp) had 1 point fewer of them. sigma from n samples is
     /// noisy, so neighbours on one flat surface land categories apart, and the rule cut
     /// their regions; regions of different colour are kept apart by Delta_q and the
     /// phase-2 guard (--dtf-guard).
