@@ -200,8 +200,8 @@ fn main() {
         ("gaussian", |p| p.kernel = Kernel::Gaussian),
         ("paper clamp", |p| p.clamp = Clamp::Paper),
         ("guard off", |p| p.guard = 0.0),
-        ("stop 5", |p| p.stop_ratio = 5.0),
-        ("stop none", |p| p.stop_ratio = 1e9),
+        ("stop 5", |p| p.stop_ratio = Some(5.0)),
+        ("stop none", |p| p.stop_ratio = None),
         ("guard 2", |p| p.guard = 2.0),
         ("guard 5", |p| p.guard = 5.0),
         ("cd scaled", |p| p.cd_display = CdDisplay::Scaled),
@@ -217,26 +217,26 @@ fn main() {
         ("mmax 12", |p| p.m_max = 12),
         ("mmax 8 stop none", |p| {
             p.m_max = 8;
-            p.stop_ratio = 1e9
+            p.stop_ratio = None
         }),
         ("paper display", |p| p.paper_display = true),
         ("mmax 8 stop none cd none", |p| {
             p.m_max = 8;
-            p.stop_ratio = 1e9;
+            p.stop_ratio = None;
             p.cd_display = CdDisplay::None
         }),
         ("mmax 8 stop none df0 0.003", |p| {
             p.m_max = 8;
-            p.stop_ratio = 1e9;
+            p.stop_ratio = None;
             p.df0_min = 0.003
         }),
         ("mmax 8 stop 5", |p| {
             p.m_max = 8;
-            p.stop_ratio = 5.0
+            p.stop_ratio = Some(5.0)
         }),
         ("mmax 8 stop none gaussian", |p| {
             p.m_max = 8;
-            p.stop_ratio = 1e9;
+            p.stop_ratio = None;
             p.kernel = Kernel::Gaussian
         }),
         ("dep-noise 0 (paper Delta)", |p| p.dep_noise = 0.0),

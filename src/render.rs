@@ -572,7 +572,14 @@ mod tests {
         assert_eq!(j.roulette.min_depth, None);
         assert_eq!(j.dtf.n, None);
         assert_eq!(j.dtf.eps_r, None);
-        assert_eq!(j.dtf.categories, vec![0, 1, 10, 20, 50, 100, 200, 500]);
+        assert_eq!(
+            j.dtf.categories,
+            vec![0, 1, 2, 3, 5, 7, 10, 14, 20, 30, 50, 70, 100, 140, 200, 300, 500]
+        );
+        assert_eq!(
+            (j.dtf.stop_ratio, j.dtf.direct),
+            (None, crate::filter::dtf::DirectMode::Split)
+        );
         assert!(j.dtf.cost_aware);
         assert_eq!(j.dtf, DtfParams::default());
         assert_eq!(j.roulette, Roulette::default());

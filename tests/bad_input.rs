@@ -246,6 +246,11 @@ fn bad_options_give_one_line_errors_naming_the_option() {
             &["--dtf-light-share 1.5"],
         ),
         (
+            "dtf stop ratio below 1",
+            &["--method", "dtf", "--spp", "16", "--dtf-stop-ratio", "0.5"],
+            &["--dtf-stop-ratio 0.5"],
+        ),
+        (
             "radiosity L~ without the estimate roulette",
             &["--rr-estimate", "radiosity"],
             &["--rr-estimate radiosity", "--rr classic"],
@@ -287,6 +292,11 @@ fn bad_options_give_one_line_errors_naming_the_option() {
         ),
         ("time 0", &["--time", "0"], &["--time"]),
         ("sampler", &["--sampler", "halton"], &["--sampler"]),
+        (
+            "dtf direct mode",
+            &["--method", "dtf", "--dtf-direct", "maybe"],
+            &["--dtf-direct"],
+        ),
         (
             "rr estimate source",
             &["--rr-estimate", "photons"],

@@ -67,7 +67,7 @@ def test_bad_options_are_refused_before_sending(dask_client):
 
 @pytest.mark.parametrize(
     "opts",
-    [dict(spp=24, dtf_n=8, seed=2), dict(dtf_eps=0.25, dtf_n=8), dict(spp=8, dtf_n=4, integrator="bdpt", dtf_light="off")],
+    [dict(spp=24, dtf_n=8, seed=2), dict(dtf_eps=0.25, dtf_n=8), dict(spp=8, dtf_n=4, integrator="bdpt", dtf_light="off", dtf_direct="filter")],
     ids=["budget", "eps_r", "bdpt"],
 )
 def test_dtf_phases_as_tasks_give_the_one_process_image(dask_client, opts):

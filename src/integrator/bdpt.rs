@@ -161,6 +161,11 @@ pub struct StrategySample {
     pub weighted: [f32; 3],
     /// Linear RGB, without the MIS weight.
     pub unweighted: [f32; 3],
+    /// Emission seen directly: s = 0 and every camera vertex between the pinhole and the
+    /// emitter (y_1 .. y_{t-2}) scattered by a Dirac lobe (mirrors, smooth glass), so the
+    /// contribution is a function of the camera ray's jitter and the glass's Fresnel
+    /// choices only (DTF adds it back unfiltered, `DirectMode`).
+    pub direct: bool,
 }
 
 const NO_LIGHT: u32 = u32::MAX;
@@ -885,6 +890,7 @@ pub fn sample_pixel_with<const N: usize>(
                     raster: conn.raster.unwrap_or(raster),
                     weighted: lw.to_rgb(),
                     unweighted: conn.l.to_rgb(),
+                    direct: s_len == 0 && camp[1..t - 1].iter().all(|v| v.delta),
                 });
             }
             match conn.raster {

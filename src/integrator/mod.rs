@@ -431,6 +431,57 @@ impl Integrator {
         ([l[0] - f[0], l[1] - f[1], l[2] - f[2]], f)
     }
 
+    /// Whether [`Integrator::sample_direct`] serves this estimator: BDPT, whose camera
+    /// subpath already carries the emission seen directly (its s = 0 strategies through
+    /// Dirac vertices only), so the split costs no ray.
+    pub fn splits_direct(&self) -> bool {
+        self.set.kind == IntegratorKind::Bdpt
+    }
+
+    /// One camera sample of pixel (x, y) as [`Integrator::sample`], and the part of its
+    /// value that is emission seen directly (`bdpt::StrategySample::direct`: the MIS-weighted
+    /// s = 0 contributions whose camera vertices before the emitter are all Dirac). Splats
+    /// go to `sink` as usual; they never hold emission seen directly. Only for an
+    /// estimator that [`Integrator::splits_direct`] (others: a direct part of 0).
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample_direct<const N: usize>(
+        &self,
+        scene: &Scene,
+        cam: &Camera,
+        x: u32,
+        y: u32,
+        s: &mut SampleStream,
+        sink: &mut SplatSink,
+        c: &mut Counters,
+    ) -> ([f32; 3], [f32; 3]) {
+        if self.set.kind != IntegratorKind::Bdpt {
+            return (self.sample_all::<N>(scene, cam, x, y, s, sink, c), [0.0; 3]);
+        }
+        let mut direct = [0.0f32; 3];
+        let mut to_sink = |p: Vec2, rgb: [f32; 3]| sink.splat(p, rgb);
+        let mut on_strategy = |st: bdpt::StrategySample| {
+            if st.direct {
+                for (d, v) in direct.iter_mut().zip(st.weighted) {
+                    *d += v;
+                }
+            }
+        };
+        let l = bdpt::sample_pixel_with::<N>(
+            scene,
+            cam,
+            x,
+            y,
+            s,
+            &self.set,
+            &self.bdpt,
+            c,
+            &mut to_sink,
+            Some(&mut on_strategy),
+        );
+        (l, direct)
+    }
+
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn sample_all<const N: usize>(

@@ -10,7 +10,8 @@ pub mod strategies;
 
 pub use crate::progress::{Progress, Silent};
 pub use dtf::{
-    render_dtf, render_dtf_with, run_dtf_pass, DtfBudget, DtfPass, DtfPasses, DtfRun, LocalPasses,
+    render_dtf, render_dtf_with, run_dtf_pass, run_dtf_pass_rest, DtfBudget, DtfPass, DtfPasses,
+    DtfRun, LocalPasses,
 };
 pub use render::{
     render, render_light_pass, render_pass, Budget, Counts, Pass, RenderOutput, RenderSettings,

@@ -76,9 +76,44 @@ pub fn render_pass(p: &Pass, film: &mut Film, rays: Option<&mut [u64]>) -> Count
         *film = f;
     }
     match p.set.spectral {
-        SpectralMode::Rgb => pass::<3>(p, film, None, rays),
-        SpectralMode::Bands8 => pass::<8>(p, film, None, rays),
-        SpectralMode::Bands16 => pass::<16>(p, film, None, rays),
+        SpectralMode::Rgb => pass::<3>(p, film, None, None, rays),
+        SpectralMode::Bands8 => pass::<8>(p, film, None, None, rays),
+        SpectralMode::Bands16 => pass::<16>(p, film, None, None, rays),
+    }
+}
+
+/// [`render_pass`] of an estimator that [`Integrator::splits_direct`] (BDPT), which also
+/// writes each camera sample less its emission seen directly (`Integrator::sample_direct`)
+/// to `rest`: the same samples' indices and batches, no splats (its `light_paths` stays
+/// 0, so read its `pixels` and batch sums, not its `value`). `film` gets the whole
+/// samples and the splats as [`render_pass`] gives them, so the two films hold per pixel
+/// the whole value and the value without the light seen directly, each with its exact
+/// spread (`filter::dtf::rest_film` joins the second with the first's splats).
+pub fn render_pass_rest(
+    p: &Pass,
+    film: &mut Film,
+    rest: &mut Film,
+    rays: Option<&mut [u64]>,
+) -> Counters {
+    assert!(
+        p.integrator.splits_direct(),
+        "a rest film is for estimators that split off the light seen directly"
+    );
+    assert_eq!(film.pixels.len(), rest.pixels.len(), "films of one size");
+    if film.splats.is_none() {
+        let mut f = Film::with_splats(film.width, film.height).expect("same size");
+        f.merge(film);
+        *film = f;
+    }
+    if rest.splats.is_none() {
+        let mut f = Film::with_splats(rest.width, rest.height).expect("same size");
+        f.merge(rest);
+        *rest = f;
+    }
+    match p.set.spectral {
+        SpectralMode::Rgb => pass::<3>(p, film, None, Some(rest), rays),
+        SpectralMode::Bands8 => pass::<8>(p, film, None, Some(rest), rays),
+        SpectralMode::Bands16 => pass::<16>(p, film, None, Some(rest), rays),
     }
 }
 
@@ -92,9 +127,9 @@ pub fn render_pass_split(p: &Pass, film: &mut Film, visible: &mut Film) -> Count
     );
     assert_eq!(film.pixels.len(), visible.pixels.len(), "films of one size");
     match p.set.spectral {
-        SpectralMode::Rgb => pass::<3>(p, film, Some(visible), None),
-        SpectralMode::Bands8 => pass::<8>(p, film, Some(visible), None),
-        SpectralMode::Bands16 => pass::<16>(p, film, Some(visible), None),
+        SpectralMode::Rgb => pass::<3>(p, film, Some(visible), None, None),
+        SpectralMode::Bands8 => pass::<8>(p, film, Some(visible), None, None),
+        SpectralMode::Bands16 => pass::<16>(p, film, Some(visible), None, None),
     }
 }
 
@@ -106,6 +141,8 @@ struct RowOut {
     /// For splatting estimators: the row's camera samples (pixel, index, value), then
     /// its splats, added to the film in row order after the pass.
     samples: Vec<Splat>,
+    /// With a rest film: the same samples less their light seen directly.
+    rest: Vec<Splat>,
     sink: SplatSink,
 }
 
@@ -113,9 +150,11 @@ fn pass<const N: usize>(
     p: &Pass,
     film: &mut Film,
     visible: Option<&mut Film>,
+    mut rest: Option<&mut Film>,
     rays: Option<&mut [u64]>,
 ) -> Counters {
     let set = p.set;
+    let split_rest = rest.is_some();
     let cam = Camera::new(set.camera, set.width, set.height);
     let w = film.width as usize;
     let h = film.pixels.len() / w.max(1);
@@ -138,7 +177,7 @@ fn pass<const N: usize>(
         }
         let c = &mut out.counters;
         let mut done = 0u64;
-        if batched && vis_row.is_none() && row_rays.is_none() {
+        if batched && vis_row.is_none() && row_rays.is_none() && !split_rest {
             // The row's samples in order, a batch of paths at a time (the same values,
             // pushed in the same order, as one at a time).
             let jobs: Vec<(u32, u32)> = (0..w)
@@ -194,6 +233,29 @@ fn pass<const N: usize>(
                     out.rejected.add(&r);
                     continue;
                 }
+                if split_rest {
+                    let (v, f) = p.integrator.sample_direct::<N>(
+                        p.scene,
+                        &cam,
+                        x as u32,
+                        y as u32,
+                        &mut s,
+                        &mut out.sink,
+                        c,
+                    );
+                    let pixel = pixel as u32;
+                    out.samples.push(Splat {
+                        pixel,
+                        index,
+                        rgb: v,
+                    });
+                    out.rest.push(Splat {
+                        pixel,
+                        index,
+                        rgb: [v[0] - f[0], v[1] - f[1], v[2] - f[2]],
+                    });
+                    continue;
+                }
                 let v = p.integrator.sample::<N>(
                     p.scene,
                     &cam,
@@ -242,8 +304,21 @@ fn pass<const N: usize>(
     for o in outs {
         counters.add(&o.counters);
         film.rejected.add(&o.rejected);
-        for sm in &o.samples {
-            film.add_sample(sm.pixel as usize, sm.index, sm.rgb);
+        for (k, sm) in o.samples.iter().enumerate() {
+            // With a rest film a sample goes to both films or, if either value is not
+            // finite, to neither (the whole film counts the rejection).
+            if let Some(r) = rest.as_deref_mut() {
+                let rv = &o.rest[k];
+                let mut j = Rejections::default();
+                if j.check(&sm.rgb) && j.check(&rv.rgb) {
+                    film.add_sample(sm.pixel as usize, sm.index, sm.rgb);
+                    r.add_sample(rv.pixel as usize, rv.index, rv.rgb);
+                } else {
+                    film.rejected.add(&j);
+                }
+            } else {
+                film.add_sample(sm.pixel as usize, sm.index, sm.rgb);
+            }
             if let Some(sf) = film.splats.as_mut() {
                 sf.add_light_path(sm.index);
             }

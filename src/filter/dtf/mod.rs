@@ -30,11 +30,13 @@
 //! - [`Clamp`]: the paper's f^+ = max(f, 0), or the exact non-negative minimiser.
 
 mod alloc;
+mod direct;
 mod light;
 mod params;
 mod region;
 
 pub use alloc::*;
+pub use direct::*;
 pub use light::*;
 pub use params::*;
 pub use region::*;

@@ -404,7 +404,10 @@ impl Dtf {
         if big_n == 0 || !(sg > 0.0 && sg.is_finite()) {
             return (1, inv_acc);
         }
-        let np_stop = self.alloc[p] as f64 * self.params.stop_ratio as f64;
+        let np_stop = match self.params.stop_ratio {
+            Some(r) => self.alloc[p] as f64 * r as f64,
+            None => f64::INFINITY,
+        };
         // (N_eff: with light paths of their own C_i's noise is below sigma / sqrt(N))
         let sqrt_n = self.n_eff[p].sqrt();
         let active_set = self.params.clamp == Clamp::ActiveSet;
@@ -432,7 +435,7 @@ impl Dtf {
                     }
                     let q = qy as usize * self.width + qx as usize;
                     // "if N[p] < N[q] then stop for pixel p": keep the (m-1)-window. With
-                    // a tolerance of `stop_ratio` (1: the paper's rule).
+                    // a tolerance of `stop_ratio` (1: the paper's rule; none by default).
                     if self.alloc[q] as f64 > np_stop {
                         return (m_acc, inv_acc);
                     }

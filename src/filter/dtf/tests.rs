@@ -51,7 +51,8 @@ fn norm_and_sigma() {
 
 #[test]
 fn classify_rounds_up_and_clamps() {
-    let c = DtfParams::default().categories;
+    // the paper's categories (the default fills their steps in)
+    let c = [0, 1, 10, 20, 50, 100, 200, 500];
     let cases = [
         (-25.0, 0),
         (0.0, 0),
@@ -397,13 +398,15 @@ fn edge_between_flat_regions_is_not_smeared() {
 #[test]
 fn weights_non_negative_and_normalised_everywhere() {
     let (w, h) = (13u32, 11u32);
-    let cats = DtfParams::default().categories;
+    // the paper's categories: neighbours up to 50x apart, so the stop rule acts
+    let cats = [0u32, 1, 10, 20, 50, 100, 200, 500];
     for kernel in [Kernel::Pyramid, Kernel::Gaussian] {
         for clamp in [Clamp::Paper, Clamp::ActiveSet] {
             let params = DtfParams {
                 kernel,
                 clamp,
                 m_max: 5,
+                stop_ratio: Some(5.0),
                 ..Default::default()
             };
             let alloc = |x: u32, y: u32| cats[1 + (hash(x, y, 3) * 4.0) as usize];
@@ -444,7 +447,9 @@ fn weights_non_negative_and_normalised_everywhere() {
                         assert!((-off..=r.m as i64 - 1 - off).contains(&dx));
                         assert!((-off..=r.m as i64 - 1 - off).contains(&dy));
                         assert!(
-                            alloc(qx, qy) as f64 <= alloc(x, y) as f64 * params.stop_ratio as f64
+                            alloc(qx, qy) as f64
+                                <= alloc(x, y) as f64
+                                    * params.stop_ratio.map_or(f64::INFINITY, f64::from)
                         );
                     }
                     sizes[r.m as usize] += 1;
@@ -461,8 +466,8 @@ fn weights_non_negative_and_normalised_everywhere() {
 
 #[test]
 fn larger_neighbour_category_stops_region() {
-    // Neighbour (3, 2) has N = 100, ten times the others' 10: beyond the default
-    // tolerance (5x), so it stops regions as in the paper.
+    // Neighbour (3, 2) has N = 100, ten times the others' 10: beyond a tolerance of 5x,
+    // so it stops regions as in the paper.
     let build = |big: u32, params: &DtfParams| {
         setup(
             6,
@@ -475,6 +480,7 @@ fn larger_neighbour_category_stops_region() {
     };
     let four = DtfParams {
         m_max: 4,
+        stop_ratio: Some(5.0),
         ..Default::default()
     };
     for (big, params) in [
@@ -482,7 +488,7 @@ fn larger_neighbour_category_stops_region() {
         (
             20,
             DtfParams {
-                stop_ratio: 1.0,
+                stop_ratio: Some(1.0),
                 ..four.clone()
             },
         ),
@@ -497,9 +503,16 @@ fn larger_neighbour_category_stops_region() {
         assert_eq!(dtf.weights(3, 2).m, 4);
     }
     // One category step (20 against 10) is within the noise of sigma^2 from n samples:
-    // the default tolerates it, the paper's rule (ratio 1) does not.
+    // 5x tolerates it, the paper's rule (ratio 1) does not.
     let dtf = build(20, &four);
     assert_eq!(dtf.weights(2, 2).m, 4);
+    // Without a stop ratio (the default) N does not stop regions at all.
+    let none = DtfParams {
+        stop_ratio: None,
+        ..four.clone()
+    };
+    let dtf = build(100, &none);
+    assert_eq!((dtf.weights(2, 2).m, dtf.weights(1, 2).m), (4, 4));
 }
 
 #[test]
