@@ -117,9 +117,43 @@ pub trait DtfPasses {
     /// seen directly (`render_pass_rest`). Runners that cannot split refuse.
     fn run_rest(&mut self, pass: DtfPass<'_>) -> Result<(Film, Film, Vec<u64>, Counters), String> {
         let _ = pass;
-        Err("dtf over bdpt: the emission seen directly kept out of the filter              (--dtf-direct split) is not distributed yet; pass dtf_direct=\"filter\""
-            .into())
+        Err(
+            "dtf over bdpt: the emission seen directly kept out of the filter \
+             (--dtf-direct split) is not distributed yet; pass dtf_direct=\"filter\""
+                .into(),
+        )
     }
+}
+
+/// Calls `f` with the [`Pass`] that renders samples `first_index..` of `pass`: its sampler
+/// dependent or not, its integrator the dependent phase's, or with the light-tracing
+/// ratio K of the light paths of their own, or `integrator` as it is.
+fn with_pass<R>(
+    scene: &Scene,
+    integrator: &Integrator,
+    set: &RenderSettings,
+    pass: &DtfPass<'_>,
+    first_index: u32,
+    progress: &dyn Progress,
+    f: impl FnOnce(&Pass<'_>) -> R,
+) -> R {
+    let mut s = *set;
+    s.sampler.dependent = pass.dependent;
+    let own = if pass.dependent {
+        Some(integrator.for_dependent_phase())
+    } else {
+        pass.lt_ratio
+            .map(|k| integrator.with_lt_ratio(Some(k.clone())))
+    };
+    f(&Pass {
+        scene,
+        integrator: own.as_ref().unwrap_or(integrator),
+        set: &s,
+        counts: pass.counts,
+        first_index,
+        stream: pass.stream,
+        progress,
+    })
 }
 
 /// Samples `first_index..first_index + count` of every pixel of a DTF pass, rendered here
@@ -132,43 +166,24 @@ pub fn run_dtf_pass(
     first_index: u32,
     progress: &dyn Progress,
 ) -> Result<(Film, Vec<u64>, Counters), String> {
-    let mut s = *set;
-    s.sampler.dependent = pass.dependent;
-    let dep;
-    let integrator = if pass.dependent {
-        dep = integrator.for_dependent_phase();
-        &dep
-    } else if let Some(k) = pass.lt_ratio {
-        dep = integrator.with_lt_ratio(Some(k.clone()));
-        &dep
-    } else {
-        integrator
-    };
     let mut film = Film::new(set.width, set.height)?;
     let mut rays = vec![0u64; if pass.rays { film.pixels.len() } else { 0 }];
-    if pass.light_paths > 0 {
-        let c = render_light_pass(
-            scene,
-            integrator,
-            &s,
-            pass.stream,
-            first_index as u64,
-            pass.light_paths,
-            &mut film,
-            progress,
-        );
-        return Ok((film, rays, c));
-    }
-    let p = Pass {
-        scene,
-        integrator,
-        set: &s,
-        counts: pass.counts,
-        first_index,
-        stream: pass.stream,
-        progress,
-    };
-    let c = render_pass(&p, &mut film, pass.rays.then_some(&mut rays[..]));
+    let c = with_pass(scene, integrator, set, pass, first_index, progress, |p| {
+        if pass.light_paths > 0 {
+            render_light_pass(
+                p.scene,
+                p.integrator,
+                p.set,
+                pass.stream,
+                first_index as u64,
+                pass.light_paths,
+                &mut film,
+                progress,
+            )
+        } else {
+            render_pass(p, &mut film, pass.rays.then_some(&mut rays[..]))
+        }
+    });
     Ok((film, rays, c))
 }
 
@@ -185,31 +200,12 @@ pub fn run_dtf_pass_rest(
     if pass.light_paths > 0 || !integrator.splits_direct() {
         return Err("dtf: a rest film is for camera passes of BDPT".into());
     }
-    let mut s = *set;
-    s.sampler.dependent = pass.dependent;
-    let dep;
-    let integrator = if pass.dependent {
-        dep = integrator.for_dependent_phase();
-        &dep
-    } else if let Some(k) = pass.lt_ratio {
-        dep = integrator.with_lt_ratio(Some(k.clone()));
-        &dep
-    } else {
-        integrator
-    };
     let mut film = Film::new(set.width, set.height)?;
     let mut rest = Film::new(set.width, set.height)?;
     let mut rays = vec![0u64; if pass.rays { film.pixels.len() } else { 0 }];
-    let p = Pass {
-        scene,
-        integrator,
-        set: &s,
-        counts: pass.counts,
-        first_index,
-        stream: pass.stream,
-        progress,
-    };
-    let c = render_pass_rest(&p, &mut film, &mut rest, pass.rays.then_some(&mut rays[..]));
+    let c = with_pass(scene, integrator, set, pass, first_index, progress, |p| {
+        render_pass_rest(p, &mut film, &mut rest, pass.rays.then_some(&mut rays[..]))
+    });
     Ok((film, rest, rays, c))
 }
 
