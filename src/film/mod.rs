@@ -60,6 +60,15 @@ impl Film {
         Ok(f)
     }
 
+    /// Gives the film a splat image (empty) if it has none, keeping what it holds.
+    pub fn ensure_splats(&mut self) {
+        if self.splats.is_none() {
+            let mut f = Film::with_splats(self.width, self.height).expect("same size");
+            f.merge(self);
+            *self = f;
+        }
+    }
+
     #[inline]
     pub fn index(&self, x: u32, y: u32) -> usize {
         y as usize * self.width as usize + x as usize

@@ -70,10 +70,8 @@ pub fn render_pass(p: &Pass, film: &mut Film, rays: Option<&mut [u64]>) -> Count
     if let Some(r) = &rays {
         assert_eq!(r.len(), film.pixels.len(), "one ray count per pixel");
     }
-    if p.integrator.splats() && film.splats.is_none() {
-        let mut f = Film::with_splats(film.width, film.height).expect("same size");
-        f.merge(film);
-        *film = f;
+    if p.integrator.splats() {
+        film.ensure_splats();
     }
     match p.set.spectral {
         SpectralMode::Rgb => pass::<3>(p, film, None, None, rays),
@@ -100,16 +98,8 @@ pub fn render_pass_rest(
         "a rest film is for estimators that split off the light seen directly"
     );
     assert_eq!(film.pixels.len(), rest.pixels.len(), "films of one size");
-    if film.splats.is_none() {
-        let mut f = Film::with_splats(film.width, film.height).expect("same size");
-        f.merge(film);
-        *film = f;
-    }
-    if rest.splats.is_none() {
-        let mut f = Film::with_splats(rest.width, rest.height).expect("same size");
-        f.merge(rest);
-        *rest = f;
-    }
+    film.ensure_splats();
+    rest.ensure_splats();
     match p.set.spectral {
         SpectralMode::Rgb => pass::<3>(p, film, None, Some(rest), rays),
         SpectralMode::Bands8 => pass::<8>(p, film, None, Some(rest), rays),
@@ -345,11 +335,7 @@ pub fn render_light_pass(
     film: &mut Film,
     progress: &dyn Progress,
 ) -> Counters {
-    if film.splats.is_none() {
-        let mut f = Film::with_splats(film.width, film.height).expect("same size");
-        f.merge(film);
-        *film = f;
-    }
+    film.ensure_splats();
     // at most LIGHT_PASS_MAX paths' splats buffered at a time (as camera passes, ~4M)
     let mut counters = Counters::default();
     let mut a = first;
