@@ -34,8 +34,12 @@ impl Scene {
     pub fn prefetch_hit(&self, prim: u32) {
         let i = prim as usize;
         prefetch_line(self.tris.as_ptr().wrapping_add(i));
-        prefetch_line(self.normals.as_ptr().wrapping_add(i));
-        prefetch_line(self.uvs.as_ptr().wrapping_add(i));
+        if let Some(a) = self.normals.first_read(i) {
+            prefetch_line(a);
+        }
+        if let Some(a) = self.uvs.first_read(i) {
+            prefetch_line(a);
+        }
         prefetch_line(self.tri_material.as_ptr().wrapping_add(i));
     }
 
@@ -47,7 +51,7 @@ impl Scene {
         let b0 = 1.0 - h.b1 - h.b2;
         let p = t[0] * b0 + t[1] * h.b1 + t[2] * h.b2;
         let ng = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
-        let ns = match &self.normals[i] {
+        let ns = match self.normals.get(i) {
             Some(n) => {
                 let s = (n[0] * b0 + n[1] * h.b1 + n[2] * h.b2).normalize_or_zero();
                 if s == Vec3::ZERO {
@@ -60,7 +64,7 @@ impl Scene {
             }
             None => ng,
         };
-        let uv = match &self.uvs[i] {
+        let uv = match self.uvs.get(i) {
             Some(uv) => uv[0] * b0 + uv[1] * h.b1 + uv[2] * h.b2,
             None => Vec2::new(h.b1, h.b2),
         };

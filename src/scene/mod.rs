@@ -10,6 +10,7 @@ pub mod obj;
 pub mod ply;
 pub mod texture;
 pub mod toml_scene;
+pub mod tri_attr;
 pub mod xml;
 
 pub use camera::{Camera, CameraDesc};
@@ -223,9 +224,10 @@ pub struct SceneInfo {
 /// The immutable scene the estimators render.
 pub struct Scene {
     pub tris: Vec<[Vec3; 3]>,
-    /// Per triangle: shading normals (None: flat shading).
-    pub normals: Vec<Option<[Vec3; 3]>>,
-    pub uvs: Vec<Option<[Vec2; 3]>>,
+    /// Per triangle: shading normals (none: flat shading).
+    pub normals: tri_attr::TriAttr<[Vec3; 3]>,
+    /// Per triangle: texture coordinates (none: the barycentrics).
+    pub uvs: tri_attr::TriAttr<[Vec2; 3]>,
     pub tri_material: Vec<u32>,
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
@@ -390,8 +392,8 @@ impl Scene {
         };
         Ok(Scene {
             tris: desc.positions,
-            normals: desc.normals,
-            uvs: desc.uvs,
+            normals: tri_attr::TriAttr::from_options(desc.normals),
+            uvs: tri_attr::TriAttr::from_options(desc.uvs),
             tri_material: desc.material,
             materials,
             textures,
