@@ -236,19 +236,46 @@ fn principled(
     ))
 }
 
+/// Statements that change how a surface looks and that kalos does not render, said once
+/// per file with the first line and how many materials have each: a bump or alpha map
+/// left out changes the image, and the brief forbids doing that without a word. (Map
+/// statements of the ambient term, which a global-illumination render has no use for,
+/// and bookkeeping such as `Ka` without `illum 3` are not listed.)
+const NOT_RENDERED: &[(&str, &str)] = &[
+    ("map_Bump", "bump map"),
+    ("map_bump", "bump map"),
+    ("bump", "bump map"),
+    ("norm", "normal map"),
+    ("map_Kn", "normal map"),
+    ("disp", "displacement map"),
+    ("decal", "decal"),
+    ("map_d", "alpha (cut-out) map"),
+    ("map_Ks", "specular map"),
+    ("map_Ns", "roughness map"),
+    ("map_Pr", "roughness map"),
+    ("map_Pm", "metallic map"),
+    ("map_Ke", "emission map"),
+    ("refl", "reflection map"),
+];
+
 /// Parse MTL text. `file` names it in messages; `dir` resolves texture paths. Also
-/// returns a note for the file when its materials were read as Blender's (one warning).
+/// returns notes for the file (one warning each): its materials read as Blender's, and
+/// the statements it uses that kalos does not render ([`NOT_RENDERED`]).
 pub fn parse_mtl(
     text: &str,
     file: &str,
     dir: &Path,
-) -> Result<(Vec<MaterialDesc>, Option<String>), String> {
+) -> Result<(Vec<MaterialDesc>, Vec<String>), String> {
     let text = crate::input::clean_text(text);
     let writer = writer_of(&text);
     let mut mats: Vec<MaterialDesc> = Vec::new();
     let mut pbr: Vec<Pbr> = Vec::new();
     // (line of newmtl, line of Ni) of the current material
     let mut lines: Vec<(usize, Option<usize>)> = Vec::new();
+    // (statement, first line, materials using it) of what is not rendered
+    let mut ignored: Vec<(&str, usize, usize)> = Vec::new();
+    // (d or Tr, its line) of the current material when it asks for transparency
+    let mut dissolve: Vec<Option<(String, usize)>> = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let line_no = i + 1;
         let line = raw.split('#').next().unwrap_or("").trim();
@@ -272,6 +299,14 @@ pub fn parse_mtl(
             mats.push(m);
             pbr.push(Pbr::default());
             lines.push((line_no, None));
+            dissolve.push(None);
+            continue;
+        }
+        if let Some(&(k, _)) = NOT_RENDERED.iter().find(|(k, _)| *k == key) {
+            match ignored.iter_mut().find(|(i, ..)| *i == k) {
+                Some(e) => e.2 += 1,
+                None => ignored.push((k, line_no, 1)),
+            }
             continue;
         }
         let known = [
@@ -318,12 +353,33 @@ pub fn parse_mtl(
                     ));
                 }
             }
+            // Dissolve: d 1 (Tr 0) is opaque; anything else asks for a see-through
+            // surface, which kalos renders only as glass (illum 7).
+            "d" | "Tr" => {
+                let v = v3(1)?[0];
+                let opaque = if key == "d" { v >= 1.0 } else { v <= 0.0 };
+                if let Some(d) = dissolve.last_mut() {
+                    *d = (!opaque).then(|| (format!("{key} {v}"), line_no));
+                }
+            }
             "map_Kd" => {
                 let args = line[key.len()..].trim();
                 let name = map_file_name(args, file, line_no, key)?;
                 m.map_kd = Some(normalise_path(dir, name));
             }
             _ => {}
+        }
+    }
+    for (m, d) in mats.iter_mut().zip(&dissolve) {
+        if let (Some((what, at)), false) = (d, m.illum == 7) {
+            m.notes.push(format!(
+                "{what} (line {at}) asks for a partly transparent surface, which kalos does not render: opaque (illum 7 makes it glass)"
+            ));
+        } else if matches!(m.illum, 4 | 6 | 9) {
+            m.notes.push(format!(
+                "illum {} (transparency, ray-traced refraction) is not rendered: opaque diffuse + glossy from Kd and Ks (illum 7 makes it glass)",
+                m.illum
+            ));
         }
     }
     for (m, (_, ni_line)) in mats.iter_mut().zip(&lines) {
@@ -347,6 +403,28 @@ pub fn parse_mtl(
             read_as_pbr += 1;
         }
     }
+    let mut notes: Vec<String> = Vec::new();
+    if !ignored.is_empty() {
+        let list: Vec<String> = ignored
+            .iter()
+            .map(|(k, line, n)| {
+                let what = NOT_RENDERED
+                    .iter()
+                    .find(|(s, _)| s == k)
+                    .map_or("", |e| e.1);
+                let times = if *n == 1 {
+                    String::new()
+                } else {
+                    format!(", {n} times")
+                };
+                format!("{k} ({what}, line {line}{times})")
+            })
+            .collect();
+        notes.push(format!(
+            "{file}: not rendered, so these surfaces will look different: {}",
+            list.join(", ")
+        ));
+    }
     let note = (read_as_pbr > 0).then(|| {
         format!(
             "{file}: {read_as_pbr} material{} {} read as a physically based surface ({}base colour Kd, roughness from {}, specular level Ks, metallic from {}), not as Phong Kd + Ks",
@@ -357,7 +435,8 @@ pub fn parse_mtl(
             if blender { "illum 3 + Ka or Pm" } else { "Pm" },
         )
     });
-    Ok((mats, note))
+    notes.extend(note);
+    Ok((mats, notes))
 }
 
 /// The factor that brings the albedo of an MTL material to at most 1 on every band
@@ -404,7 +483,7 @@ mod tests {
     fn parses_materials_and_reports_lines() {
         let text = "# c\nnewmtl a\nKd 0.5\nKs 0.1 0.2 0.3\nNs 15\nillum 5\nmap_Kd -s 1 1 1 tex\\wood.png\nnewmtl b\nKe 1 2 3\n";
         let (m, note) = parse_mtl(text, "x.mtl", Path::new("/d")).unwrap();
-        assert!(note.is_none() && m.iter().all(|m| m.model.is_none()));
+        assert!(note.is_empty() && m.iter().all(|m| m.model.is_none()));
         assert_eq!(m.len(), 2);
         assert_eq!(m[0].kd, [0.5; 3]);
         assert_eq!(m[0].ks, [0.1, 0.2, 0.3]);
@@ -426,7 +505,7 @@ mod tests {
         use crate::scene::SurfaceModel;
         let cpp = "# Blender 3.6.5 MTL File: 'room.blend'\n# www.blender.org\n\nnewmtl Wall\nNs 250.000000\nKa 1.000000 1.000000 1.000000\nKd 0.800000 0.800000 0.800000\nKs 0.500000 0.500000 0.500000\nKe 0.0 0.0 0.0\nNi 1.450000\nd 1.000000\nillum 2\n\nnewmtl Gold\nNs 810.0\nKa 1.0 1.0 1.0\nKd 1.0 0.766 0.336\nKs 0.5 0.5 0.5\nNi 1.45\nillum 3\n\nnewmtl Matte\nNs 0\nKd 0.5 0.5 0.5\nKs 0 0 0\nillum 1\n";
         let (m, note) = parse_mtl(cpp, "room.mtl", Path::new(".")).unwrap();
-        let note = note.expect("a note for the file");
+        let note = note.first().expect("a note for the file");
         assert!(
             note.starts_with("room.mtl: 2 materials are read as") && note.contains("Blender"),
             "{note}"
@@ -478,6 +557,35 @@ mod tests {
         assert!(
             matches!(m[0].model, Some(SurfaceModel::Conductor { alpha, .. }) if (alpha - 0.09).abs() < 1e-5)
         );
-        assert!(note.unwrap().contains("PBR extension"));
+        assert!(note[0].contains("PBR extension"));
+    }
+
+    /// Maps and transparency kalos does not render are said, never dropped in silence:
+    /// one note for the file's maps, one per material for its transparency.
+    #[test]
+    fn what_is_not_rendered_is_said() {
+        let text = "newmtl a\nKd 0.5 0.5 0.5\nmap_Bump -bm 0.3 a n.png\nmap_d leaf.png\nd 0.25\n\
+                    newmtl b\nKd 0.5 0.5 0.5\nbump b.png\nmap_Bump c.png\nTr 0\nd 1\n\
+                    newmtl c\nKs 1 1 1\nNi 1.5\nd 0.1\nillum 7\n\
+                    newmtl w\nKd 0.2 0.2 0.2\nillum 4\nmap_Ka amb.png\n";
+        let (m, notes) = parse_mtl(text, "x.mtl", Path::new(".")).unwrap();
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert_eq!(
+            notes[0],
+            "x.mtl: not rendered, so these surfaces will look different: map_Bump (bump map, \
+             line 3, 2 times), map_d (alpha (cut-out) map, line 4), bump (bump map, line 8)"
+        );
+        assert!(
+            m[0].notes[0].starts_with("d 0.25 (line 5) asks for a partly transparent"),
+            "{:?}",
+            m[0].notes
+        );
+        assert!(m[1].notes.is_empty(), "opaque d 1 / Tr 0: {:?}", m[1].notes);
+        assert!(m[2].notes.is_empty(), "glass: {:?}", m[2].notes);
+        assert!(
+            m[3].notes[0].starts_with("illum 4 (transparency"),
+            "{:?}",
+            m[3].notes
+        );
     }
 }
