@@ -166,7 +166,7 @@ fn bad_scene_files_give_one_line_errors_with_file_and_line() {
                     format!("mtllib tex.mtl\n{TRI}usemtl a\nf 1 2 3\n"),
                 )
             },
-            vec!["gone.png".into()],
+            vec!["tex.mtl:1: material 'a'".into(), "gone.png".into()],
         ),
         (
             "toml syntax error",

@@ -251,7 +251,11 @@ impl Scene {
                 Some(p) => Some(match tex_paths.iter().position(|q| q == p) {
                     Some(i) => i as u32,
                     None => {
-                        textures.push(Texture::load(p)?);
+                        // (the error names the material that asks for the texture)
+                        textures.push(Texture::load(p).map_err(|e| match &m.source {
+                            Some(at) => format!("{at}: material '{}': texture {e}", m.name),
+                            None => format!("material '{}': texture {e}", m.name),
+                        })?);
                         tex_paths.push(p.clone());
                         textures.len() as u32 - 1
                     }
