@@ -93,6 +93,36 @@ fn snake_case(s: &str) -> String {
     out
 }
 
+/// Mitsuba 0.6's `diffuse` and `roughdiffuse` read `diffuseReflectance` when it is given
+/// and `reflectance` otherwise (scenes of that era use both, e.g. the bedroom scenes of
+/// "Neural complex luminaires"); Mitsuba 3 knows only `reflectance`. So in a 0.x file the
+/// upgraded `diffuse_reflectance` becomes `reflectance`, and a `reflectance` beside it is
+/// renamed so that it is warned as unused, as 0.6 ignored it.
+fn diffuse_reflectance_alias(attrs: &[(String, String)], children: &mut [El]) {
+    let kind = attrs
+        .iter()
+        .find(|(k, _)| k == "type")
+        .map(|(_, v)| v.as_str());
+    if !matches!(kind, Some("diffuse" | "roughdiffuse")) {
+        return;
+    }
+    let named = |c: &El, n: &str| c.attrs.iter().any(|(k, v)| k == "name" && v == n);
+    if !children.iter().any(|c| named(c, "diffuse_reflectance")) {
+        return;
+    }
+    for c in children.iter_mut() {
+        for (k, v) in c.attrs.iter_mut() {
+            if k == "name" {
+                if v == "reflectance" {
+                    *v = "reflectance (overridden by diffuseReflectance)".into();
+                } else if v == "diffuse_reflectance" {
+                    *v = "reflectance".into();
+                }
+            }
+        }
+    }
+}
+
 struct Reader {
     defaults: HashMap<String, String>,
     /// Warnings found while reading (unknown version, ...).
@@ -244,6 +274,9 @@ impl Reader {
         let mut children = Vec::new();
         for c in n.children().filter(|c| c.is_element()) {
             children.push(self.convert(c, doc, file, upgrade)?);
+        }
+        if upgrade && tag == "bsdf" {
+            diffuse_reflectance_alias(&attrs, &mut children);
         }
         Ok(El {
             tag,
@@ -2601,6 +2634,38 @@ mod tests {
         );
         let d = scene(&format!(r#"<integrator type="path"/>{shape}"#)).unwrap();
         assert_eq!(d.defaults.rr_min_depth, Some(4));
+    }
+
+    /// Mitsuba 0.6's diffuse reads `diffuseReflectance` before `reflectance`; a 3.x file
+    /// has no such alias (the parameter is warned as unused).
+    #[test]
+    fn diffuse_reflectance_is_the_06_alias_of_reflectance() {
+        let body = r#"<shape type="rectangle"><bsdf type="diffuse">
+            <rgb name="diffuseReflectance" value="0.2 0.4 0.6"/>
+            <rgb name="reflectance" value="0.9 0.9 0.9"/></bsdf></shape>"#;
+        let old = parse(
+            &format!("<scene version=\"0.5.0\">{body}</scene>"),
+            "t.xml",
+            Path::new("."),
+        )
+        .unwrap();
+        assert_eq!(old.materials.last().unwrap().kd, [0.2, 0.4, 0.6]);
+        assert!(
+            old.warnings
+                .iter()
+                .any(|w| w.contains("overridden by diffuseReflectance")),
+            "{:?}",
+            old.warnings
+        );
+        let new = scene(&body.replace("diffuseReflectance", "diffuse_reflectance")).unwrap();
+        assert_eq!(new.materials.last().unwrap().kd, [0.9; 3]);
+        assert!(
+            new.warnings
+                .iter()
+                .any(|w| w.contains("'diffuse_reflectance'")),
+            "{:?}",
+            new.warnings
+        );
     }
 
     #[test]
