@@ -600,6 +600,15 @@ fn f32s(data: &[u8], pixels: usize, what: &str) -> Result<Vec<f32>, String> {
 /// What a task of a DTF pass returns: its film bytes, its rest film's bytes (passes with
 /// `rest`), rays per pixel (u64 bytes, when asked), paths, rays and light rays.
 type PartOut = (Vec<u8>, Option<Vec<u8>>, Vec<u8>, u64, u64, u64);
+/// [`PartOut`] as Python bytes.
+type PartBytes<'py> = (
+    Bound<'py, PyBytes>,
+    Option<Bound<'py, PyBytes>>,
+    Bound<'py, PyBytes>,
+    u64,
+    u64,
+    u64,
+);
 
 /// One part of a DTF pass (a Dask task of `kalos.distributed`): samples `first..first+n`
 /// of every pixel (or `first..first+counts[p]`, counts as u32 bytes) of the phase with
@@ -625,14 +634,7 @@ fn render_dtf_part<'py>(
     k: Option<Vec<u8>>,
     light_paths: u64,
     rest: bool,
-) -> PyResult<(
-    Bound<'py, PyBytes>,
-    Option<Bound<'py, PyBytes>>,
-    Bound<'py, PyBytes>,
-    u64,
-    u64,
-    u64,
-)> {
+) -> PyResult<PartBytes<'py>> {
     use kalos::integrator::bdpt::LtRatio;
     use kalos::pipeline::{run_dtf_pass, run_dtf_pass_rest, Counts, DtfPass, Silent};
     let job = parse_job(&scene.spec, &argv).map_err(value_error)?;
