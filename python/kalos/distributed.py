@@ -30,7 +30,7 @@ from . import Film, RenderResult, Scene, _argv, _kalos, job as _job, load, merge
 
 log = logging.getLogger("kalos.distributed")
 
-__all__ = ["render", "render_dtf_part", "render_part", "sample_ranges"]
+__all__ = ["light_ranges", "render", "render_dtf_part", "render_part", "sample_ranges"]
 
 _SCENES: Dict[Tuple[str, Optional[float]], Scene] = {}
 _SCENES_LOCK = threading.Lock()
@@ -89,9 +89,10 @@ def render(
     merged film: the same image as ``kalos.render(scene, spp=spp, **options)``.
 
     ``method="plain"`` (the default) and ``method="dtf"`` (each phase's pass split into
-    sample ranges of about ``chunk_spp`` x pixels samples; the allocation, top-ups and
-    filter on the client) with a sample budget
-    or ``dtf_eps`` (not ``time``) can be distributed. Raises ValueError for bad options before anything is sent."""
+    sample ranges of about ``chunk_spp`` x pixels samples, over BDPT the light pass into
+    ranges of as many light paths; the allocation, top-ups and filter on the client) with
+    a sample budget or ``dtf_eps`` (not ``time``) can be distributed, with any integrator
+    and DTF options. Raises ValueError for bad options before anything is sent."""
     try:
         from distributed import as_completed, get_client
     except ImportError as e:  # pragma: no cover - depends on the environment
@@ -183,12 +184,25 @@ def _distributable(options: Dict[str, Any]) -> str:
 
 
 def render_dtf_part(spec: str, argv: List[str], dependent: bool, stream: int, first: int, n: int,
-                    counts: Optional[bytes], rays: bool) -> Tuple[bytes, bytes, int, int]:
+                    counts: Optional[bytes], rays: bool, k: Optional[bytes] = None, light_paths: int = 0,
+                    rest: bool = False) -> Tuple[bytes, Optional[bytes], bytes, int, int, int]:
     """One task of a DTF pass: samples ``first..first+n`` of every pixel (or
-    ``first..first+counts[p]``) of the phase; returns the film bytes, rays per pixel, paths
-    and rays."""
+    ``first..first+counts[p]``) of the phase, or with ``light_paths`` light paths
+    ``first..first+light_paths`` (phase 2's light pass over BDPT); ``k`` is the pass's
+    K[p] (BDPT's light-tracing ratio, float32 bytes), ``rest`` asks for the film of the
+    samples less their emission seen directly too. Returns the film bytes, the rest film's
+    bytes (or None), rays per pixel, paths, rays and light rays."""
     scene = _cached_scene(spec)
-    return _kalos.render_dtf_part(scene._native, list(argv), dependent, stream, first, n, counts, rays)
+    return _kalos.render_dtf_part(scene._native, list(argv), dependent, stream, first, n, counts, rays,
+                                  k, light_paths, rest)
+
+
+def light_ranges(count: int, target: int) -> List[Tuple[int, int]]:
+    """A light pass's tasks: (first light path, paths) covering 0..count, ``target`` paths
+    each (the last fewer). Path m is a pure function of m and the film's sums are
+    integers, so any cut gives the one-process film: no alignment to its chunks needed."""
+    target = max(1, int(target))
+    return [(a, min(target, count - a)) for a in range(0, count, target)]
 
 
 def _balanced_ranges(per_index, target: int) -> List[Tuple[int, int]]:
@@ -208,7 +222,9 @@ def _balanced_ranges(per_index, target: int) -> List[Tuple[int, int]]:
 
 def _render_dtf(client, sc, spec, spp, chunk_spp, progress, retries, options) -> RenderResult:
     """DTF on the cluster: each pass (phase 1, phase 2, top-ups) split into sample ranges
-    as tasks; the allocation, top-ups and filter run on the client (in Rust)."""
+    as tasks, over BDPT phase 2's light pass into ranges of light paths, every task given
+    the pass's K[p] and, with ``dtf_direct="split"``, returning its rest film too; the
+    allocation, K, top-ups and filter run on the client (in Rust)."""
     import numpy as np
     from distributed import as_completed
 
@@ -222,21 +238,27 @@ def _render_dtf(client, sc, spec, spp, chunk_spp, progress, retries, options) ->
     t0 = time.perf_counter()
     passes = []
 
-    def run_pass(dependent, stream, n, counts, rays):
-        arr = None if counts is None else np.frombuffer(counts, dtype="<u4").astype(np.int64)
+    def run_pass(dependent, stream, n, counts, rays, k=None, light_paths=0, rest=False):
         pixels = native_pixels
-        # samples at each index j: all pixels (uniform) or those whose count exceeds j
-        if arr is None:
-            per_index = np.full(n, pixels, dtype=np.int64)
+        if light_paths:
+            # phase 2's light paths of their own: ranges of path numbers, each reading K
+            target = pixels * int(chunk_spp) if chunk_spp else math.ceil(light_paths / (2 * threads))
+            tasks = [(dependent, a, 0, None, rays, m) for a, m in light_ranges(light_paths, target)]
         else:
-            hist = np.bincount(arr, minlength=int(arr.max(initial=0)) + 1)
-            per_index = pixels - np.cumsum(hist)[:-1]
-        ranges = _balanced_ranges(per_index, pixels * int(chunk_spp) if chunk_spp
-                                  else math.ceil(int(per_index.sum()) / (2 * threads)))
+            arr = None if counts is None else np.frombuffer(counts, dtype="<u4").astype(np.int64)
+            # samples at each index j: all pixels (uniform) or those whose count exceeds j
+            if arr is None:
+                per_index = np.full(n, pixels, dtype=np.int64)
+            else:
+                hist = np.bincount(arr, minlength=int(arr.max(initial=0)) + 1)
+                per_index = pixels - np.cumsum(hist)[:-1]
+            ranges = _balanced_ranges(per_index, pixels * int(chunk_spp) if chunk_spp
+                                      else math.ceil(int(per_index.sum()) / (2 * threads)))
+            tasks = [(dependent, a, m, None if arr is None else np.clip(arr - a, 0, m).astype("<u4").tobytes(),
+                      rays, 0) for a, m in ranges]
         futures = []
-        for i, (a, k) in enumerate(ranges):
-            part = None if arr is None else np.clip(arr - a, 0, k).astype("<u4").tobytes()
-            futures.append(client.submit(render_dtf_part, spec, argv, dependent, stream, a, k, part, rays,
+        for i, (dep, a, m, part, r, paths) in enumerate(tasks):
+            futures.append(client.submit(render_dtf_part, spec, argv, dep, stream, a, m, part, r, k, paths, rest,
                                          key=f"kalos-dtf-{token}-s{stream}-{i}", pure=False, retries=retries))
         index = {f.key: i for i, f in enumerate(futures)}
         out = [None] * len(futures)
@@ -250,7 +272,8 @@ def _render_dtf(client, sc, spec, spp, chunk_spp, progress, retries, options) ->
             client.cancel(futures)
             raise
         passes.append((stream, len(futures)))
-        log.info("dtf pass on stream %d: %d parts, %.1f s elapsed", stream, len(futures), time.perf_counter() - t0)
+        log.info("dtf pass on stream %d: %d parts%s, %.1f s elapsed", stream, len(futures),
+                 f" of {light_paths} light paths" if light_paths else "", time.perf_counter() - t0)
         return out
 
     native = _kalos.render_dtf_with(sc._native, argv, run_pass)

@@ -583,12 +583,43 @@ fn u32s(data: &[u8], pixels: usize, what: &str) -> PyResult<Vec<u32>> {
         .collect())
 }
 
+fn f32s(data: &[u8], pixels: usize, what: &str) -> Result<Vec<f32>, String> {
+    if data.len() != pixels * 4 {
+        return Err(format!(
+            "{what}: {} bytes, {pixels} pixels need {}",
+            data.len(),
+            pixels * 4
+        ));
+    }
+    Ok(data
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect())
+}
+
+/// What a task of a DTF pass returns: its film bytes, its rest film's bytes (passes with
+/// `rest`), rays per pixel (u64 bytes, when asked), paths, rays and light rays.
+type PartOut = (Vec<u8>, Option<Vec<u8>>, Vec<u8>, u64, u64, u64);
+/// [`PartOut`] as Python bytes.
+type PartBytes<'py> = (
+    Bound<'py, PyBytes>,
+    Option<Bound<'py, PyBytes>>,
+    Bound<'py, PyBytes>,
+    u64,
+    u64,
+    u64,
+);
+
 /// One part of a DTF pass (a Dask task of `kalos.distributed`): samples `first..first+n`
 /// of every pixel (or `first..first+counts[p]`, counts as u32 bytes) of the phase with
-/// dependent tests or not, on `stream`. Returns the part's film bytes, its rays per pixel
-/// (u64 bytes, when `rays`), paths and rays.
+/// dependent tests or not, on `stream`; or, with `light_paths` > 0, light paths
+/// `first..first+light_paths` (phase 2's light pass over BDPT). `k`: the pass's K[p]
+/// (BDPT's light-tracing ratio, f32 bytes), read by its camera samples and light paths
+/// alike. With `rest`, also the film of the samples less their emission seen directly
+/// (`--dtf-direct split`). Returns (film bytes, rest film bytes or None, rays per pixel
+/// as u64 bytes (when `rays`), paths, rays, light rays).
 #[pyfunction]
-#[pyo3(signature = (scene, argv, dependent, stream, first, n, counts, rays))]
+#[pyo3(signature = (scene, argv, dependent, stream, first, n, counts, rays, k = None, light_paths = 0, rest = false))]
 #[allow(clippy::too_many_arguments)]
 fn render_dtf_part<'py>(
     py: Python<'py>,
@@ -596,19 +627,31 @@ fn render_dtf_part<'py>(
     argv: Vec<String>,
     dependent: bool,
     stream: u32,
-    first: u32,
+    first: u64,
     n: u32,
     counts: Option<Vec<u8>>,
     rays: bool,
-) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, u64, u64)> {
-    use kalos::pipeline::{run_dtf_pass, Counts, DtfPass, Silent};
+    k: Option<Vec<u8>>,
+    light_paths: u64,
+    rest: bool,
+) -> PyResult<PartBytes<'py>> {
+    use kalos::integrator::bdpt::LtRatio;
+    use kalos::pipeline::{run_dtf_pass, run_dtf_pass_rest, Counts, DtfPass, Silent};
     let job = parse_job(&scene.spec, &argv).map_err(value_error)?;
     let sc = scene.scene.clone();
-    let out = py.detach(move || -> Result<_, String> {
+    let out = py.detach(move || -> Result<PartOut, String> {
         let set = job.settings(&sc);
         let pixels = set.width as usize * set.height as usize;
         let per_pixel = match &counts {
             Some(c) => Some(u32s(c, pixels, "counts").map_err(|e| e.to_string())?),
+            None => None,
+        };
+        let k = match &k {
+            Some(b) => Some(Arc::new(LtRatio {
+                width: set.width,
+                height: set.height,
+                k: f32s(b, pixels, "k")?,
+            })),
             None => None,
         };
         let (pool, _) = kalos::render::thread_pool(job.threads)?;
@@ -619,36 +662,68 @@ fn render_dtf_part<'py>(
                 set.spectral.bands(),
                 &Silent,
             )?;
-            let pass = DtfPass::samples(
-                dependent,
-                stream,
-                match &per_pixel {
-                    Some(v) => Counts::PerPixel(v),
-                    None => Counts::Uniform(n),
-                },
-                rays,
-            );
-            let (film, r, c) = run_dtf_pass(&sc, &integ, &set, &pass, first, &Silent)?;
-            let end = first as u64
-                + per_pixel
-                    .as_ref()
-                    .map_or(n, |v| v.iter().copied().max().unwrap_or(0)) as u64;
-            let f = FilmFile {
+            let pass = DtfPass {
+                lt_ratio: k.as_ref(),
+                light_paths,
+                rest,
+                ..DtfPass::samples(
+                    dependent,
+                    stream,
+                    match &per_pixel {
+                        Some(v) => Counts::PerPixel(v),
+                        None => Counts::Uniform(n),
+                    },
+                    rays,
+                )
+            };
+            let (film, rest_film, r, c) = if rest {
+                let (f, rf, r, c) = run_dtf_pass_rest(&sc, &integ, &set, &pass, first, &Silent)?;
+                (f, Some(rf), r, c)
+            } else {
+                let (f, r, c) = run_dtf_pass(&sc, &integ, &set, &pass, first, &Silent)?;
+                (f, None, r, c)
+            };
+            // the part's range: sample indices, or light-path numbers of a light pass
+            let end = first
+                + if light_paths > 0 {
+                    light_paths
+                } else {
+                    per_pixel
+                        .as_ref()
+                        .map_or(n, |v| v.iter().copied().max().unwrap_or(0))
+                        as u64
+                };
+            let file = |film| FilmFile {
                 job: serde_json::to_string(&job).unwrap_or_default(),
                 key: job.key(),
-                ranges: vec![(first as u64, end)],
+                ranges: vec![(first, end)],
                 film,
             };
             let rb: Vec<u8> = r.iter().flat_map(|x| x.to_le_bytes()).collect();
-            Ok((film_to_bytes(&f), rb, c.paths, c.rays))
+            Ok((
+                film_to_bytes(&file(film)),
+                rest_film.map(|f| film_to_bytes(&file(f))),
+                rb,
+                c.paths,
+                c.rays,
+                c.light_rays,
+            ))
         })
     });
-    let (fb, rb, paths, nrays) = out.map_err(value_error)?;
-    Ok((PyBytes::new(py, &fb), PyBytes::new(py, &rb), paths, nrays))
+    let (fb, restb, rb, paths, nrays, light_rays) = out.map_err(value_error)?;
+    Ok((
+        PyBytes::new(py, &fb),
+        restb.map(|b| PyBytes::new(py, &b)),
+        PyBytes::new(py, &rb),
+        paths,
+        nrays,
+        light_rays,
+    ))
 }
 
 /// DTF's passes handed to a Python function that splits each into parts and returns
-/// them [(film bytes, rays bytes, paths, rays), ...]; merged here exactly.
+/// them [(film bytes, rest film bytes or None, rays bytes, paths, rays, light rays), ...]
+/// (`render_dtf_part`'s); merged here exactly.
 struct PyPasses<'a> {
     run_pass: &'a Bound<'a, PyAny>,
     error: Option<PyErr>,
@@ -656,19 +731,19 @@ struct PyPasses<'a> {
     height: u32,
 }
 
-impl kalos::pipeline::DtfPasses for PyPasses<'_> {
-    fn run(
-        &mut self,
-        pass: kalos::pipeline::DtfPass<'_>,
-    ) -> Result<(kalos::film::Film, Vec<u64>, kalos::integrator::Counters), String> {
+/// A pass's films (the rest film with `rest`), rays per pixel and counters.
+type Merged = (
+    kalos::film::Film,
+    Option<kalos::film::Film>,
+    Vec<u64>,
+    kalos::integrator::Counters,
+);
+
+impl PyPasses<'_> {
+    /// `run_pass(dependent, stream, n, counts, rays, k, light_paths, rest)`: the pass's
+    /// parts, merged in their order (integer sums: any order gives the same bits).
+    fn parts(&mut self, pass: &kalos::pipeline::DtfPass<'_>) -> Result<Merged, String> {
         use kalos::pipeline::Counts;
-        if pass.lt_ratio.is_some() || pass.light_paths > 0 {
-            return Err(
-                "dtf over bdpt: the light paths of their own (--dtf-light auto) are not \
-                 distributed yet; pass dtf_light=\"off\""
-                    .into(),
-            );
-        }
         let py = self.run_pass.py();
         let (n, counts) = match pass.counts {
             Counts::Uniform(n) => (n, None),
@@ -677,10 +752,24 @@ impl kalos::pipeline::DtfPasses for PyPasses<'_> {
                 (0, Some(PyBytes::new(py, &b)))
             }
         };
+        // K[p] as f32 bytes: every part's camera samples and light paths read these bits
+        let k = pass.lt_ratio.map(|k| {
+            let b: Vec<u8> = k.k.iter().flat_map(|x| x.to_le_bytes()).collect();
+            PyBytes::new(py, &b)
+        });
         let r = self
             .run_pass
-            .call1((pass.dependent, pass.stream, n, counts, pass.rays))
-            .and_then(|r| r.extract::<Vec<(Vec<u8>, Vec<u8>, u64, u64)>>());
+            .call1((
+                pass.dependent,
+                pass.stream,
+                n,
+                counts,
+                pass.rays,
+                k,
+                pass.light_paths,
+                pass.rest,
+            ))
+            .and_then(|r| r.extract::<Vec<PartOut>>());
         let parts = match r {
             Ok(p) => p,
             Err(e) => {
@@ -690,17 +779,27 @@ impl kalos::pipeline::DtfPasses for PyPasses<'_> {
         };
         let pixels = self.width as usize * self.height as usize;
         let mut film: Option<kalos::film::Film> = None;
+        let mut rest: Option<kalos::film::Film> = None;
         let mut rays = vec![0u64; if pass.rays { pixels } else { 0 }];
         let mut c = kalos::integrator::Counters::default();
-        for (i, (fb, rb, paths, nrays)) in parts.iter().enumerate() {
-            let f = film_from_bytes(fb, &format!("dtf pass part {i}"))?;
+        let read = |b: &[u8], what: &str| -> Result<kalos::film::Film, String> {
+            let f = film_from_bytes(b, what)?;
             if (f.film.width, f.film.height) != (self.width, self.height) {
-                return Err(format!("dtf pass part {i}: another film size"));
+                return Err(format!("{what}: another film size"));
             }
-            // (the first part's film, splats and all, then exact sums of the others)
-            match &mut film {
-                None => film = Some(f.film),
-                Some(m) => m.merge(&f.film),
+            Ok(f.film)
+        };
+        // (the first part's film, splats and all, then exact sums of the others)
+        let add = |into: &mut Option<kalos::film::Film>, f: kalos::film::Film| match into {
+            None => *into = Some(f),
+            Some(m) => m.merge(&f),
+        };
+        for (i, (fb, restb, rb, paths, nrays, light_rays)) in parts.iter().enumerate() {
+            add(&mut film, read(fb, &format!("dtf pass part {i}"))?);
+            match (pass.rest, restb) {
+                (true, Some(b)) => add(&mut rest, read(b, &format!("dtf pass part {i}'s rest"))?),
+                (true, None) => return Err(format!("dtf pass part {i}: no rest film")),
+                _ => {}
             }
             if pass.rays {
                 if rb.len() != pixels * 8 {
@@ -710,20 +809,54 @@ impl kalos::pipeline::DtfPasses for PyPasses<'_> {
                     *r += u64::from_le_bytes(b.try_into().unwrap_or_default());
                 }
             }
-            c.paths += paths;
-            c.rays += nrays;
+            c.add(&kalos::integrator::Counters {
+                paths: *paths,
+                rays: *nrays,
+                light_rays: *light_rays,
+            });
         }
         let film = match film {
             Some(f) => f,
             None => kalos::film::Film::new(self.width, self.height)?,
         };
+        let rest = match (pass.rest, rest) {
+            (true, None) => Some(kalos::film::Film::new(self.width, self.height)?),
+            (_, r) => r,
+        };
+        Ok((film, rest, rays, c))
+    }
+}
+
+impl kalos::pipeline::DtfPasses for PyPasses<'_> {
+    fn run(
+        &mut self,
+        pass: kalos::pipeline::DtfPass<'_>,
+    ) -> Result<(kalos::film::Film, Vec<u64>, kalos::integrator::Counters), String> {
+        let (film, _, rays, c) = self.parts(&pass)?;
         Ok((film, rays, c))
+    }
+
+    fn run_rest(
+        &mut self,
+        pass: kalos::pipeline::DtfPass<'_>,
+    ) -> Result<
+        (
+            kalos::film::Film,
+            kalos::film::Film,
+            Vec<u64>,
+            kalos::integrator::Counters,
+        ),
+        String,
+    > {
+        let (film, rest, rays, c) = self.parts(&pass)?;
+        Ok((film, rest.expect("a rest pass's rest film"), rays, c))
     }
 }
 
 /// DTF on the client with its passes run by `run_pass(dependent, stream, n, counts,
-/// rays)` (kalos.distributed: Dask tasks of `render_dtf_part`): the allocation, top-ups
-/// and the filter run here, so the image is the one-process DTF image, bit for bit.
+/// rays, k, light_paths, rest)` (kalos.distributed: Dask tasks of `render_dtf_part`): the
+/// allocation, K[p], top-ups and the filter run here, so the image is the one-process DTF
+/// image, bit for bit (over BDPT too: its light pass and `--dtf-direct split`).
 #[pyfunction]
 fn render_dtf_with(
     py: Python<'_>,
@@ -784,6 +917,9 @@ fn render_dtf_with(
             "phase1_seconds": run.phase1_seconds,
             "phase2_seconds": run.phase2_seconds,
             "filter_seconds": run.filter_seconds,
+            "light_paths": run.light_paths,
+            "light_share": run.light_plan.map(|p| p.share),
+            "splat_variance_share": run.light_plan.map(|p| p.splat_variance_share),
         },
     });
     Ok(NativeRendered {

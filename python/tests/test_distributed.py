@@ -66,21 +66,43 @@ def test_bad_options_are_refused_before_sending(dask_client):
 
 
 @pytest.mark.parametrize(
-    "opts",
-    [dict(spp=24, dtf_n=8, seed=2), dict(dtf_eps=0.25, dtf_n=8), dict(spp=8, dtf_n=4, integrator="bdpt", dtf_light="off", dtf_direct="filter")],
-    ids=["budget", "eps_r", "bdpt"],
+    "scene,opts",
+    [
+        ("cornell", dict(spp=24, dtf_n=8, seed=2)),
+        ("cornell", dict(dtf_eps=0.25, dtf_n=8)),
+        ("cornell", dict(spp=8, dtf_n=4, integrator="bdpt", dtf_light="off", dtf_direct="filter")),
+        # DTF over BDPT with its defaults (dtf_light="auto", dtf_direct="split"): on the
+        # caustic phase 2 traces light paths of its own, weighed with K[p]
+        ("caustic", dict(spp=8, dtf_n=4, seed=2, integrator="bdpt")),
+        ("cornell", dict(spp=8, dtf_n=4, integrator="bdpt")),
+    ],
+    ids=["budget", "eps_r", "bdpt-filter", "bdpt-defaults-caustic", "bdpt-defaults-cornell"],
 )
-def test_dtf_phases_as_tasks_give_the_one_process_image(dask_client, opts):
-    """Phase 1, phase 2 and the top-ups split into sample ranges on the workers; the
-    allocation and the filter on the client: the one-process DTF image, bit for bit."""
+def test_dtf_phases_as_tasks_give_the_one_process_image(dask_client, scene, opts):
+    """Phase 1, phase 2 (over BDPT its light pass too) and the top-ups split into sample
+    (and light-path) ranges on the workers; the allocation and the filter on the client:
+    the one-process DTF image, bit for bit."""
     res = (16, 16)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", kalos.KalosWarning)
-        ref = kalos.render("cornell", method="dtf", res=res, **opts)
-        img = kalos.distributed.render("cornell", client=dask_client, chunk_spp=3, method="dtf", res=res, **opts)
+        ref = kalos.render(scene, method="dtf", res=res, **opts)
+        img = kalos.distributed.render(scene, client=dask_client, chunk_spp=3, method="dtf", res=res, **opts)
     assert same(img, ref)
     assert img.stats["passes"] >= 2 and img.stats["parts"] > img.stats["passes"]
     assert img.stats["dtf"]["n"] == ref.stats["dtf"]["n"]
+    assert img.stats["dtf"]["light_paths"] == ref.stats["dtf"]["light_paths"]
+    if scene == "caustic":
+        # the light pass ran, in several tasks whose ranges are not the one-process
+        # render's chunks of 1024 paths
+        paths = ref.stats["dtf"]["light_paths"]
+        assert paths > 16 * 16 * 3
+        assert len(kalos.distributed.light_ranges(paths, 16 * 16 * 3)) > 1
+
+
+def test_light_ranges_cover_the_light_paths():
+    assert kalos.distributed.light_ranges(10, 4) == [(0, 4), (4, 4), (8, 2)]
+    assert kalos.distributed.light_ranges(3, 0) == [(0, 1), (1, 1), (2, 1)]
+    assert kalos.distributed.light_ranges(0, 5) == []
 
 
 def test_a_worker_killed_mid_render_leaves_the_image_unchanged(dask_client, reference):
@@ -137,6 +159,12 @@ def test_scheduler_and_workers_as_separate_processes(reference, cli, tmp_path):
             assert "4 parts" in r.stderr and (tmp_path / "d.json").is_file()
             cli(*args, "-q", "-o", tmp_path / "p.exr")
             assert (tmp_path / "d.exr").read_bytes() == (tmp_path / "p.exr").read_bytes()
+            # DTF over BDPT with its defaults (light pass, emission seen directly split off)
+            dtf = ["render", "caustic", "--method", "dtf", "--integrator", "bdpt", "--spp", 8, "--dtf-n", 4,
+                   "--res", "16x16", "--seed", 2, "-q"]
+            cli(*dtf, "--dask", addr, "--dask-chunk-spp", 3, "-o", tmp_path / "dd.exr")
+            cli(*dtf, "-o", tmp_path / "dp.exr")
+            assert (tmp_path / "dd.exr").read_bytes() == (tmp_path / "dp.exr").read_bytes()
             # and its refusals are one line
             from conftest import cli_error
             assert "give spp (--spp), not time" in cli_error(cli("render", "cornell", "--time", 1, "--dask", addr,

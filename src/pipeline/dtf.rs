@@ -108,18 +108,24 @@ impl<'a> DtfPass<'a> {
 }
 
 /// What runs DTF's passes: `LocalPasses` here, or anything that splits a pass into
-/// sample ranges run elsewhere and merges them exactly (the Python module's Dask tasks).
-/// Returns the pass's film, rays per pixel (empty unless asked) and counters.
+/// ranges run elsewhere and merges them exactly (the Python module's Dask tasks): camera
+/// passes into sample index ranges, the light pass into ranges of light-path numbers
+/// (`run_dtf_pass` with `first_index`), every part given the pass's K[p] (`lt_ratio`).
+/// Film sums are integers and each sample or light path a pure function of its index,
+/// so the merged parts are the whole pass's film bit for bit, however it is split.
+/// Returns the pass's film, rays per pixel (empty unless asked) and counters (all three
+/// fields: `plan_light` reads phase 1's `light_rays`).
 pub trait DtfPasses {
     fn run(&mut self, pass: DtfPass<'_>) -> Result<(Film, Vec<u64>, Counters), String>;
 
     /// A pass with `rest` set: its film and the film of its samples less their emission
-    /// seen directly (`render_pass_rest`). Runners that cannot split refuse.
+    /// seen directly (`render_pass_rest`, `run_dtf_pass_rest` per part; both films merged
+    /// exactly). A runner that cannot return the second film refuses with one line.
     fn run_rest(&mut self, pass: DtfPass<'_>) -> Result<(Film, Film, Vec<u64>, Counters), String> {
         let _ = pass;
         Err(
-            "dtf over bdpt: the emission seen directly kept out of the filter \
-             (--dtf-direct split) is not distributed yet; pass dtf_direct=\"filter\""
+            "dtf over bdpt: this runner of passes cannot split off the emission seen \
+             directly (--dtf-direct split); use --dtf-direct filter"
                 .into(),
         )
     }
@@ -127,7 +133,8 @@ pub trait DtfPasses {
 
 /// Calls `f` with the [`Pass`] that renders samples `first_index..` of `pass`: its sampler
 /// dependent or not, its integrator the dependent phase's, or with the light-tracing
-/// ratio K of the light paths of their own, or `integrator` as it is.
+/// ratio K of the light paths of their own, or `integrator` as it is. (A light pass reads
+/// its first path from `render_light_pass`'s arguments, not from the `Pass`.)
 fn with_pass<R>(
     scene: &Scene,
     integrator: &Integrator,
@@ -157,25 +164,31 @@ fn with_pass<R>(
 }
 
 /// Samples `first_index..first_index + count` of every pixel of a DTF pass, rendered here
-/// (a part of a pass split into sample ranges; the whole pass from 0).
+/// (a part of a pass split into sample ranges; the whole pass from 0); of a light pass
+/// (`light_paths > 0`), light paths `first_index..first_index + light_paths`.
 pub fn run_dtf_pass(
     scene: &Scene,
     integrator: &Integrator,
     set: &RenderSettings,
     pass: &DtfPass<'_>,
-    first_index: u32,
+    first_index: u64,
     progress: &dyn Progress,
 ) -> Result<(Film, Vec<u64>, Counters), String> {
     let mut film = Film::new(set.width, set.height)?;
     let mut rays = vec![0u64; if pass.rays { film.pixels.len() } else { 0 }];
-    let c = with_pass(scene, integrator, set, pass, first_index, progress, |p| {
+    let first_sample = if pass.light_paths > 0 {
+        0
+    } else {
+        camera_index(first_index)?
+    };
+    let c = with_pass(scene, integrator, set, pass, first_sample, progress, |p| {
         if pass.light_paths > 0 {
             render_light_pass(
                 p.scene,
                 p.integrator,
                 p.set,
                 pass.stream,
-                first_index as u64,
+                first_index,
                 pass.light_paths,
                 &mut film,
                 progress,
@@ -194,12 +207,13 @@ pub fn run_dtf_pass_rest(
     integrator: &Integrator,
     set: &RenderSettings,
     pass: &DtfPass<'_>,
-    first_index: u32,
+    first_index: u64,
     progress: &dyn Progress,
 ) -> Result<(Film, Film, Vec<u64>, Counters), String> {
     if pass.light_paths > 0 || !integrator.splits_direct() {
         return Err("dtf: a rest film is for camera passes of BDPT".into());
     }
+    let first_index = camera_index(first_index)?;
     let mut film = Film::new(set.width, set.height)?;
     let mut rest = Film::new(set.width, set.height)?;
     let mut rays = vec![0u64; if pass.rays { film.pixels.len() } else { 0 }];
@@ -207,6 +221,12 @@ pub fn run_dtf_pass_rest(
         render_pass_rest(p, &mut film, &mut rest, pass.rays.then_some(&mut rays[..]))
     });
     Ok((film, rest, rays, c))
+}
+
+/// A camera pass's first sample index (sample indices are u32).
+fn camera_index(first_index: u64) -> Result<u32, String> {
+    u32::try_from(first_index)
+        .map_err(|_| format!("dtf: sample index {first_index} past the last one (2^32 - 1)"))
 }
 
 /// DTF's passes rendered in this process.
@@ -813,6 +833,173 @@ mod tests {
             z.abs() < 3.5,
             "light pixels: DTF {a} against plain {b}, z = {z}"
         );
+    }
+
+    /// A runner that splits every pass as the Python module's does (`kalos.distributed`):
+    /// camera passes into sample index ranges of `step` (pixel p takes a..a +
+    /// clamp(N[p] - a, 0, step)), the light pass into ranges of light-path numbers whose
+    /// bounds are not multiples of the light pass's chunks, K[p] through its f32 bytes;
+    /// the parts merged in reverse order.
+    struct SplitPasses<'a> {
+        local: LocalPasses<'a>,
+        step: u32,
+        light_parts: usize,
+        rest_passes: usize,
+    }
+
+    impl SplitPasses<'_> {
+        fn parts(
+            &mut self,
+            pass: DtfPass<'_>,
+        ) -> Result<(Film, Option<Film>, Vec<u64>, Counters), String> {
+            let set = self.local.set;
+            let k = pass.lt_ratio.map(|k| {
+                let b: Vec<u8> = k.k.iter().flat_map(|x| x.to_le_bytes()).collect();
+                Arc::new(LtRatio {
+                    width: set.width,
+                    height: set.height,
+                    k: b.chunks_exact(4)
+                        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+                        .collect(),
+                })
+            });
+            let mut parts = vec![];
+            if pass.light_paths > 0 {
+                let l = pass.light_paths;
+                let cuts = [0, l / 3 + 7, 2 * l / 3 + 1, l];
+                for w in cuts.windows(2).filter(|w| w[1] > w[0]) {
+                    let part = DtfPass {
+                        lt_ratio: k.as_ref(),
+                        light_paths: w[1] - w[0],
+                        ..pass
+                    };
+                    let (f, r, c) = run_dtf_pass(
+                        self.local.scene,
+                        self.local.integrator,
+                        set,
+                        &part,
+                        w[0],
+                        &Silent,
+                    )?;
+                    parts.push((f, None, r, c));
+                    self.light_parts += 1;
+                }
+            } else {
+                let (max, per_pixel): (u32, Option<&[u32]>) = match pass.counts {
+                    Counts::Uniform(n) => (n, None),
+                    Counts::PerPixel(v) => (v.iter().copied().max().unwrap_or(0), Some(v)),
+                };
+                for a in (0..max).step_by(self.step as usize) {
+                    let clipped: Vec<u32>;
+                    let counts = match per_pixel {
+                        Some(v) => {
+                            clipped = v
+                                .iter()
+                                .map(|&n| n.saturating_sub(a).min(self.step))
+                                .collect();
+                            Counts::PerPixel(&clipped)
+                        }
+                        None => Counts::Uniform((max - a).min(self.step)),
+                    };
+                    let part = DtfPass {
+                        lt_ratio: k.as_ref(),
+                        counts,
+                        ..pass
+                    };
+                    let (sc, integ) = (self.local.scene, self.local.integrator);
+                    parts.push(if pass.rest {
+                        let (f, r, rays, c) =
+                            run_dtf_pass_rest(sc, integ, set, &part, a as u64, &Silent)?;
+                        (f, Some(r), rays, c)
+                    } else {
+                        let (f, rays, c) = run_dtf_pass(sc, integ, set, &part, a as u64, &Silent)?;
+                        (f, None, rays, c)
+                    });
+                }
+            }
+            let mut out: Option<(Film, Option<Film>, Vec<u64>, Counters)> = None;
+            for (f, r, rays, c) in parts.into_iter().rev() {
+                match &mut out {
+                    None => out = Some((f, r, rays, c)),
+                    Some((mf, mr, mrays, mc)) => {
+                        mf.merge(&f);
+                        if let (Some(a), Some(b)) = (mr.as_mut(), &r) {
+                            a.merge(b);
+                        }
+                        mrays.iter_mut().zip(&rays).for_each(|(a, b)| *a += b);
+                        mc.add(&c);
+                    }
+                }
+            }
+            Ok(out.expect("a pass of at least one part"))
+        }
+    }
+
+    impl DtfPasses for SplitPasses<'_> {
+        fn run(&mut self, pass: DtfPass<'_>) -> Result<(Film, Vec<u64>, Counters), String> {
+            let (f, _, r, c) = self.parts(pass)?;
+            Ok((f, r, c))
+        }
+        fn run_rest(
+            &mut self,
+            pass: DtfPass<'_>,
+        ) -> Result<(Film, Film, Vec<u64>, Counters), String> {
+            self.rest_passes += 1;
+            let (f, r, rays, c) = self.parts(pass)?;
+            Ok((f, r.expect("a rest film"), rays, c))
+        }
+    }
+
+    /// DTF over BDPT with its defaults (`--dtf-light auto`, `--dtf-direct split`), every
+    /// pass split into parts as the Dask runner splits them: the one-process run bit for
+    /// bit (films, image, counters), light pass included (on the caustic at 16x16, 8 spp,
+    /// phase 2 traces light paths of its own).
+    #[test]
+    fn dtf_over_bdpt_split_into_parts_is_the_one_process_run() {
+        let scene = crate::scene::load("caustic").unwrap();
+        let mut job = RenderJob::new("caustic");
+        job.integrator = IntegratorKind::Bdpt;
+        job.res = Some((16, 16));
+        job.seed = 2;
+        job.dtf.n = Some(4);
+        let set = job.settings(&scene);
+        let integ =
+            Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap();
+        let budget = DtfBudget::Spp(8.0);
+        let one = render_dtf(&scene, &integ, &set, &job.dtf, budget, &Silent).unwrap();
+        let mut split = SplitPasses {
+            local: LocalPasses {
+                scene: &scene,
+                integrator: &integ,
+                set: &set,
+                progress: &Silent,
+            },
+            step: 3,
+            light_parts: 0,
+            rest_passes: 0,
+        };
+        let d = render_dtf_with(&set, &job.dtf, budget, &Silent, &mut split).unwrap();
+        assert!(
+            one.light_paths > 0 && one.direct.is_some(),
+            "defaults: light pass and split"
+        );
+        assert!(split.light_parts == 3 && split.rest_passes >= 2);
+        assert_eq!(d.light_paths, one.light_paths);
+        assert_eq!(d.alloc, one.alloc);
+        assert_eq!(d.dependent, one.dependent);
+        assert_eq!(d.independent, one.independent);
+        assert_eq!(d.counters, one.counters);
+        assert_eq!(d.direct, one.direct);
+        let bits = |r: &DtfRun| -> Vec<u32> {
+            r.out
+                .combined
+                .data
+                .iter()
+                .flatten()
+                .map(|x| x.to_bits())
+                .collect()
+        };
+        assert_eq!(bits(&d), bits(&one));
     }
 
     /// The light pass gives the same film on 1 and 3 threads, and counts every path.
