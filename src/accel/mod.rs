@@ -301,127 +301,16 @@ impl Tri4 {
 /// Children per BVH node.
 const WIDTH: usize = 8;
 
-/// Eight-wide BVH node (96 bytes, 32-byte aligned: two cache lines wherever
-/// it lies): the boxes of up to eight children quantized to 8 bits per plane on
-/// a per-node grid (Ylitie et al. 2017), in SoA form (lanes = children), and
-/// their references. One AVX2 slab test covers the eight boxes (two SSE ones on
-/// the baseline), dequantizing the planes it reads.
-///
-/// A plane is `origin + q * step` evaluated in f32 (the product is exact: 8-bit
-/// `q` times a power of two, so a multiply-add in either order of rounding gives
-/// the same value), and the builder picks each `q` so that this value lies on or
-/// outside the child's true box: quantized boxes are conservative.
+/// Eight-wide BVH node (256 bytes, four cache lines): the boxes of up to
+/// eight children in SoA form, lanes = children, and their references. One
+/// AVX2 slab test covers the eight boxes (two SSE ones on the baseline).
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(32))]
+#[repr(C, align(64))]
 struct Node8 {
-    /// Grid origin: the minimum corner of the children's boxes' union.
-    origin: [f32; 3],
-    /// Grid step per axis, a power of two stored as the biased exponent of an
-    /// f32 (1..=254, so the step is a normal number).
-    exp: [u8; 3],
-    /// Bit i set: slot i holds a child (unused slots are masked out).
-    used: u8,
-    /// Quantized planes min.x, min.y, min.z, max.x, max.y, max.z of the eight
-    /// children.
-    q: [[u8; WIDTH]; 6],
-    /// Child references (see [`LEAF`]).
+    /// min.x, min.y, min.z, max.x, max.y, max.z of the eight children.
+    b: [[f32; WIDTH]; 6],
+    /// Child references (see [`LEAF`]); unused slots have empty boxes.
     child: [u32; WIDTH],
-}
-
-const _: () = assert!(std::mem::size_of::<Node8>() == 96);
-
-/// The grid step a biased exponent byte stands for.
-#[inline(always)]
-fn quant_step(e: u8) -> f32 {
-    f32::from_bits((e as u32) << 23)
-}
-
-/// A dequantized plane: `origin + q * step`, the operations of the slab tests.
-#[inline(always)]
-fn dequant(origin: f32, step: f32, q: u8) -> f32 {
-    q as f32 * step + origin
-}
-
-/// Grid of one axis of a node whose children span `[lo, hi]` (finite): the
-/// smallest biased exponent whose 255 steps reach `hi` from `lo` in f32.
-fn quant_exp(lo: f32, hi: f32) -> u8 {
-    let ext = hi as f64 - lo as f64;
-    let mut e = if ext > 0.0 {
-        // 255 * 2^(e - 127) >= ext; start one below the estimate (rounding).
-        ((ext / 255.0).log2().ceil() as i32 + 127 - 1).clamp(1, 254)
-    } else {
-        1
-    };
-    while e < 254 && dequant(lo, quant_step(e as u8), 255) < hi {
-        e += 1;
-    }
-    e as u8
-}
-
-/// Quantized planes of `[lo, hi]` (inside the node's span) on the grid
-/// `origin`, `step`: the largest `q` whose plane is at most `lo` and the
-/// smallest whose plane is at least `hi` (outward rounding).
-fn quantize(origin: f32, step: f32, lo: f32, hi: f32) -> (u8, u8) {
-    let guess = |x: f32| ((x as f64 - origin as f64) / step as f64).clamp(0.0, 255.0);
-    let mut qlo = guess(lo).floor() as u8;
-    while qlo > 0 && dequant(origin, step, qlo) > lo {
-        qlo -= 1;
-    }
-    while qlo < 255 && dequant(origin, step, qlo + 1) <= lo {
-        qlo += 1;
-    }
-    let mut qhi = guess(hi).ceil() as u8;
-    while qhi < 255 && dequant(origin, step, qhi) < hi {
-        qhi += 1;
-    }
-    while qhi > 0 && dequant(origin, step, qhi - 1) >= hi {
-        qhi -= 1;
-    }
-    debug_assert!(dequant(origin, step, qlo) <= lo && dequant(origin, step, qhi) >= hi);
-    (qlo, qhi)
-}
-
-impl Node8 {
-    /// A node over the children's boxes `boxes` (at most [`WIDTH`], finite);
-    /// child references are filled in later.
-    fn new(boxes: &[(Vec3, Vec3)]) -> Node8 {
-        debug_assert!((1..=WIDTH).contains(&boxes.len()));
-        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        for &(a, b) in boxes {
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
-        let exp = [0, 1, 2].map(|a| quant_exp(lo[a], hi[a]));
-        let mut q = [[0u8; WIDTH]; 6];
-        for (lane, &(a, b)) in boxes.iter().enumerate() {
-            for axis in 0..3 {
-                let (l, h) = quantize(lo[axis], quant_step(exp[axis]), a[axis], b[axis]);
-                q[axis][lane] = l;
-                q[axis + 3][lane] = h;
-            }
-        }
-        Node8 {
-            origin: lo.to_array(),
-            exp,
-            used: ((1u32 << boxes.len()) - 1) as u8,
-            q,
-            child: [0; WIDTH],
-        }
-    }
-
-    /// The conservative box of slot `lane` as the slab tests see it; `None`
-    /// for an unused slot.
-    #[cfg(test)]
-    fn child_box(&self, lane: usize) -> Option<(Vec3, Vec3)> {
-        if self.used & (1 << lane) == 0 {
-            return None;
-        }
-        let p = |row: usize| {
-            let a = row % 3;
-            dequant(self.origin[a], quant_step(self.exp[a]), self.q[row][lane])
-        };
-        Some((Vec3::new(p(0), p(1), p(2)), Vec3::new(p(3), p(4), p(5))))
-    }
 }
 
 /// Child reference flag: a leaf, encoded as `LEAF | packet << 2 | (count - 1)`
@@ -553,13 +442,7 @@ impl RayData {
     /// of a zero, which no comparison below sees), so hits do not change.
     #[inline(always)]
     fn slab4(&self, n: &Node8, off: usize, t_max: f32) -> (Vec4, u32) {
-        let step = [0, 1, 2].map(|a| Vec4::splat(quant_step(n.exp[a])));
-        let origin = [0, 1, 2].map(|a| Vec4::splat(n.origin[a]));
-        let b = |row: usize| {
-            let q = &n.q[row][off..off + 4];
-            let q = Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32);
-            q * step[row % 3] + origin[row % 3]
-        };
+        let b = |row: usize| Vec4::from_slice(&n.b[row][off..off + 4]);
         let [nx, ny, nz] = self.near;
         let [fx, fy, fz] = self.far;
         let x0 = (b(nx) - self.ox) * self.ix;
@@ -569,9 +452,10 @@ impl RayData {
         let y1 = (b(fy) - self.oy) * self.iy;
         let z1 = (b(fz) - self.oz) * self.iz;
         let tn = x0.max(y0).max(z0.max(Vec4::ZERO));
+        // Clamping t_max to MAX makes unused lanes ([+inf, +inf] boxes, tn =
+        // +inf) fail the test below even for an infinite t_max.
         let tf = x1.min(y1).min(z1.min(Vec4::splat(t_max.min(f32::MAX))));
-        let used = (n.used as u32 >> off) & 0xf;
-        (tn, (tn * (1.0 / ROBUST)).cmple(tf).bitmask() & used)
+        (tn, (tn * (1.0 / ROBUST)).cmple(tf).bitmask())
     }
 
     /// [`Self::slab4`] over all eight lanes at once (AVX), operation for
@@ -583,23 +467,22 @@ impl RayData {
         use std::arch::x86_64::*;
         let [nx, ny, nz] = self.near;
         let [fx, fy, fz] = self.far;
-        let q = n.q.as_ptr() as *const u8;
-        // Row `r` dequantized: q * step + origin of its axis (mul then add, as
-        // in `slab4`; the product is exact, so an FMA would give the same).
-        macro_rules! plane {
-            ($r:expr) => {{
-                let a = $r % 3;
-                // SAFETY: rows are 8 bytes inside the node.
-                let qi = unsafe { _mm_loadl_epi64(q.add(WIDTH * $r) as *const __m128i) };
-                let qf = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(qi));
-                _mm256_add_ps(
-                    _mm256_mul_ps(qf, _mm256_set1_ps(quant_step(n.exp[a]))),
-                    _mm256_set1_ps(n.origin[a]),
-                )
-            }};
-        }
-        let (bnx, bny, bnz) = (plane!(nx), plane!(ny), plane!(nz));
-        let (bfx, bfy, bfz) = (plane!(fx), plane!(fy), plane!(fz));
+        let b = n.b.as_ptr() as *const f32;
+        // SAFETY: rows are 32 bytes inside a 64-byte aligned node.
+        let (bnx, bny, bnz) = unsafe {
+            (
+                _mm256_load_ps(b.add(WIDTH * nx)),
+                _mm256_load_ps(b.add(WIDTH * ny)),
+                _mm256_load_ps(b.add(WIDTH * nz)),
+            )
+        };
+        let (bfx, bfy, bfz) = unsafe {
+            (
+                _mm256_load_ps(b.add(WIDTH * fx)),
+                _mm256_load_ps(b.add(WIDTH * fy)),
+                _mm256_load_ps(b.add(WIDTH * fz)),
+            )
+        };
         let w = |v: Vec4| {
             let v: __m128 = v.into();
             _mm256_set_m128(v, v)
@@ -624,7 +507,7 @@ impl RayData {
         let mut out = [0.0f32; WIDTH];
         // SAFETY: `out` holds eight floats.
         unsafe { _mm256_storeu_ps(out.as_mut_ptr(), tn) };
-        (out, _mm256_movemask_ps(ok) as u32 & n.used as u32)
+        (out, _mm256_movemask_ps(ok) as u32)
     }
 }
 
@@ -1121,7 +1004,7 @@ impl Bvh {
         #[cfg(target_arch = "x86_64")]
         {
             let (p, lines) = if r & LEAF == 0 {
-                (self.nodes.as_ptr().wrapping_add(r as usize) as *const i8, 2)
+                (self.nodes.as_ptr().wrapping_add(r as usize) as *const i8, 4)
             } else {
                 (
                     self.tris.as_ptr().wrapping_add(leaf_packet(r).0) as *const i8,
@@ -1245,11 +1128,18 @@ impl Collapse<'_> {
         }
         let kids = &kids[..nk];
         let idx = self.nodes.len();
-        let mut boxes = [(Vec3::ZERO, Vec3::ZERO); WIDTH];
-        for (b, &k) in boxes.iter_mut().zip(kids) {
-            *b = (n2[k].min, n2[k].max);
+        // Unused lanes get the box [+inf, +inf], which no ray overlaps.
+        let mut b = [[f32::INFINITY; WIDTH]; 6];
+        for (lane, &k) in kids.iter().enumerate() {
+            for a in 0..3 {
+                b[a][lane] = n2[k].min[a];
+                b[a + 3][lane] = n2[k].max[a];
+            }
         }
-        self.nodes.push(Node8::new(&boxes[..nk]));
+        self.nodes.push(Node8 {
+            b,
+            child: [0; WIDTH],
+        });
         let mut stack_needed = 0;
         for (lane, &k) in kids.iter().enumerate() {
             let (r, s) = self.collapse(k);
