@@ -100,27 +100,6 @@ impl SplatFilm {
         )
     }
 
-    /// Batch b's splat image at pixel i (None when the batch has no light path).
-    pub fn batch_splat_value(&self, i: usize, b: usize, pixels: usize) -> Option<[f64; 3]> {
-        if self.batch_paths[b] == 0 {
-            return None;
-        }
-        let ks = pixels as f64 / (self.batch_paths[b] as f64 * FIXED);
-        Some([0, 1, 2].map(|c| self.batch_splat[i][b][c] as f64 * ks))
-    }
-
-    /// Variance of pixel i's splat image from the spread of its batch splat images, over
-    /// every batch with light paths (whether or not the pixel has camera samples there).
-    pub fn splat_variance(&self, i: usize, pixels: usize) -> [f64; 3] {
-        let mut vals = [[0.0; 3]; BATCHES];
-        let mut k = 0;
-        for v in (0..BATCHES).filter_map(|b| self.batch_splat_value(i, b, pixels)) {
-            vals[k] = v;
-            k += 1;
-        }
-        batch_means_variance(&vals[..k])
-    }
-
     /// Variance of pixel i's value from the spread of its batch images.
     pub fn batch_variance(&self, i: usize, pixels: usize) -> [f64; 3] {
         let mut vals = [[0.0; 3]; BATCHES];

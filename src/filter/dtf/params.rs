@@ -117,25 +117,6 @@ pub enum DirectMode {
     Filter,
 }
 
-/// How DTF over an estimator that splats (BDPT) filters the splat image (`--dtf-splat`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "kebab-case")]
-pub enum SplatLayer {
-    /// The splat (light-tracing) layer filtered on its own: phase 2's value C_i = camera
-    /// mean + splat image, and each part gets its own regions and error-optimal weights.
-    /// The camera part keeps the filter of the whole value (regions from C_d, sigma, N);
-    /// the splat image's regions compare the splat images of both phases and weigh by the
-    /// splat image's own noise (its batch-means variance, which falls with the light
-    /// paths of the whole film, L / P, not with the pixel's N), in windows up to
-    /// `--dtf-splat-mmax`. The sum of two linear filters whose weights tend to the primary
-    /// pixel as the noise vanishes: asymptotically unbiased as the paper's.
-    Separate,
-    /// The whole value filtered with one set of weights (camera samples and splats
-    /// together).
-    #[default]
-    Joint,
-}
-
 /// Parameters of DTF (paper §6 names n, eps_r, m_max and Delta f[0]_min as the four
 /// critical ones). Each option's name, help and default are written here once: the CLI
 /// flattens this struct, `Default` parses an empty command line, serde reads the same.
@@ -278,14 +259,6 @@ pub struct DtfParams {
     /// filtered with the rest). No effect on the path tracer.
     #[arg(long = "dtf-direct", value_enum, default_value_t = DirectMode::Split)]
     pub direct: DirectMode,
-    /// DTF over BDPT: joint (the splat image filtered with the camera samples, one set of
-    /// weights) or separate (the splat image filtered on its own, by its own noise, in
-    /// windows up to --dtf-splat-mmax). No effect on estimators that do not splat.
-    #[arg(long = "dtf-splat", value_enum, default_value_t = SplatLayer::Joint)]
-    pub splat_layer: SplatLayer,
-    /// DTF over BDPT with --dtf-splat separate: the splat image's largest region side.
-    #[arg(long = "dtf-splat-mmax", default_value_t = 16)]
-    pub splat_m_max: u32,
 }
 
 impl Default for DtfParams {
@@ -340,12 +313,6 @@ impl DtfParams {
             return Err(format!(
                 "dtf: m_max = {}: the window side must be 1..=32",
                 self.m_max
-            ));
-        }
-        if !(1..=32).contains(&self.splat_m_max) {
-            return Err(format!(
-                "--dtf-splat-mmax {}: the window side must be 1..=32",
-                self.splat_m_max
             ));
         }
         if let Some(r) = self.stop_ratio.filter(|r| !(r.is_finite() && *r >= 1.0)) {

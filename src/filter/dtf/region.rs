@@ -187,42 +187,6 @@ pub struct Dtf {
     /// Phase 1's batch images per pixel (`DtfParams::dep_noise`; empty without splats or
     /// with dep_noise 0; NaN where a batch has no sample).
     cd_batches: Vec<[[f64; 3]; BATCHES]>,
-    /// With `SplatLayer::Separate` over films that splat: the splat layer's tables and
-    /// phase 2's camera means (the camera layer).
-    splat: Option<SplatTables>,
-}
-
-/// The splat (light-tracing) layer of DTF over BDPT (`SplatLayer::Separate`): what its
-/// region forming reads, as [`Dtf`]'s fields of the same names do for the whole value.
-struct SplatTables {
-    /// Phase 1's splat image (the values the tests compare) and its batch images.
-    cd: Vec<[f64; 3]>,
-    cd_batches: Vec<[[f64; 3]; BATCHES]>,
-    /// Phase 2's splat image and its batch-means variance (the guard).
-    ci: Vec<[f64; 3]>,
-    ci_var: Vec<[f64; 3]>,
-    /// The standard deviation of phase 2's splat image (sum over the channels), its root
-    /// mean square over a (2 `EFFECTIVE_RADIUS` + 1)^2 window: the noise the weights trade
-    /// against Delta (N = 1: it is already the noise of the value).
-    sd: Vec<f64>,
-    ones: Vec<f64>,
-    /// Phase 2's camera means: C_i less its splats.
-    ci_cam: Vec<[f64; 3]>,
-}
-
-/// The tables region forming reads for one layer: the whole value ([`Dtf::whole`]) or the
-/// splat image ([`SplatTables`]).
-struct Layer<'a> {
-    cd: &'a [[f64; 3]],
-    cd_batches: &'a [[[f64; 3]; BATCHES]],
-    ci: &'a [[f64; 3]],
-    ci_var: &'a [[f64; 3]],
-    /// sigma and N of the weights' noise term sigma / sqrt(N).
-    sigma: &'a [f64],
-    n: &'a [f64],
-    m_max: u32,
-    df0_min: f64,
-    dep_noise: f64,
 }
 
 impl Dtf {
@@ -284,7 +248,6 @@ impl Dtf {
                 .into_par_iter()
                 .map(|i| film_variance_of_value(indep, i))
                 .collect(),
-            splat: None,
             cd_batches: match &dep.splats {
                 Some(sp) if params.dep_noise > 0.0 => (0..dep.pixels.len())
                     .map(|i| {
@@ -300,81 +263,7 @@ impl Dtf {
         if smooth {
             d.sigma_f = super::smoothed_sigma(&d.sigma, d.width, d.height);
         }
-        if params.splat_layer == SplatLayer::Separate {
-            if let (Some(sd), Some(si)) = (&dep.splats, &indep.splats) {
-                let px = dep.pixels.len();
-                let sdev: Vec<f64> = (0..px)
-                    .map(|i| {
-                        si.splat_variance(i, px)
-                            .iter()
-                            .map(|v| v.max(0.0).sqrt())
-                            .sum()
-                    })
-                    .collect();
-                d.splat = Some(SplatTables {
-                    cd: (0..px).map(|i| sd.splat_value(i, px)).collect(),
-                    cd_batches: if params.dep_noise > 0.0 {
-                        (0..px)
-                            .map(|i| {
-                                std::array::from_fn(|b| {
-                                    sd.batch_splat_value(i, b, px).unwrap_or([f64::NAN; 3])
-                                })
-                            })
-                            .collect()
-                    } else {
-                        Vec::new()
-                    },
-                    ci: (0..px).map(|i| si.splat_value(i, px)).collect(),
-                    ci_var: (0..px).map(|i| si.splat_variance(i, px)).collect(),
-                    sd: super::smoothed_sigma(&sdev, d.width, d.height),
-                    ones: vec![1.0; px],
-                    ci_cam: (0..px)
-                        .map(|i| {
-                            if indep.pixels[i].n > 0 {
-                                indep.pixels[i].mean()
-                            } else {
-                                [0.0; 3]
-                            }
-                        })
-                        .collect(),
-                });
-            }
-        }
         Ok(d)
-    }
-
-    /// The whole value's layer: what the paper's filter reads.
-    fn whole(&self) -> Layer<'_> {
-        Layer {
-            cd: &self.cd,
-            cd_batches: &self.cd_batches,
-            ci: &self.ci,
-            ci_var: &self.ci_var,
-            sigma: if self.sigma_f.is_empty() {
-                &self.sigma
-            } else {
-                &self.sigma_f
-            },
-            n: &self.n_eff,
-            m_max: self.params.m_max,
-            df0_min: self.params.df0_min as f64,
-            dep_noise: self.params.dep_noise as f64,
-        }
-    }
-
-    /// The splat layer (`SplatLayer::Separate`), if there is one.
-    fn splat_layer(&self) -> Option<Layer<'_>> {
-        self.splat.as_ref().map(|t| Layer {
-            cd: &t.cd,
-            cd_batches: &t.cd_batches,
-            ci: &t.ci,
-            ci_var: &t.ci_var,
-            sigma: &t.sd,
-            n: &t.ones,
-            m_max: self.params.splat_m_max,
-            df0_min: self.params.df0_min as f64,
-            dep_noise: self.params.dep_noise as f64,
-        })
     }
 
     /// Region and weights f* of pixel (x, y) (for inspection and tests; [`Dtf::run`] uses
@@ -401,12 +290,12 @@ impl Dtf {
     /// are not (Cornell, the light's lower edge: 0.94 against 0.26, averaged to 0.63). As N
     /// grows the SE vanishes and any real difference is seen, so the filter vanishes too.
     #[inline]
-    fn guard_delta(&self, l: &Layer<'_>, p: usize, q: usize) -> f64 {
+    fn guard_delta(&self, p: usize, q: usize) -> f64 {
         let k = self.params.guard as f64;
         if k <= 0.0 || self.n_ind[p] < 2 || self.n_ind[q] < 2 {
             return 0.0;
         }
-        let (a, b, va, vb) = (l.ci[p], l.ci[q], l.ci_var[p], l.ci_var[q]);
+        let (a, b, va, vb) = (self.ci[p], self.ci[q], self.ci_var[p], self.ci_var[q]);
         (0..3)
             .map(|c| ((a[c] - b[c]).abs() - k * (va[c] + vb[c]).sqrt()).max(0.0))
             .sum::<f64>()
@@ -417,13 +306,13 @@ impl Dtf {
     /// variance of the difference D = C_d[p] - C_d[q]: the part of D that the two pixels'
     /// own (unshared) noise explains is taken out, as E[D^2] = true^2 + SE^2.
     #[inline]
-    fn dep_delta(&self, l: &Layer<'_>, p: usize, q: usize) -> f64 {
-        let (a, b) = (l.cd[p], l.cd[q]);
-        if l.cd_batches.is_empty() {
+    fn dep_delta(&self, p: usize, q: usize) -> f64 {
+        let (a, b) = (self.cd[p], self.cd[q]);
+        if self.cd_batches.is_empty() {
             return diff_norm(a, b);
         }
-        let k2 = l.dep_noise.powi(2);
-        let (bp, bq) = (&l.cd_batches[p], &l.cd_batches[q]);
+        let k2 = (self.params.dep_noise as f64).powi(2);
+        let (bp, bq) = (&self.cd_batches[p], &self.cd_batches[q]);
         let nb = BATCHES as f64;
         (0..3)
             .map(|c| {
@@ -479,13 +368,8 @@ impl Dtf {
     /// Region forming for pixel p = (x, y) (paper §5, third step). On return the first
     /// `s.w.len()` candidates carry the accepted weights f*; returns the accepted m.
     fn region_into(&self, x: usize, y: usize, s: &mut Scratch) -> u32 {
-        self.layer_region_into(&self.whole(), x, y, s)
-    }
-
-    /// [`Dtf::region_into`] over the tables of one layer.
-    fn layer_region_into(&self, l: &Layer<'_>, x: usize, y: usize, s: &mut Scratch) -> u32 {
         // `grow` leaves the accepted window's unnormalised f^+ d in `s.w` and 1 / its sum.
-        let (m, inv) = self.grow(l, x, y, s);
+        let (m, inv) = self.grow(x, y, s);
         if inv != 1.0 {
             s.w.iter_mut().for_each(|f| *f *= inv);
         }
@@ -494,7 +378,7 @@ impl Dtf {
 
     /// The window growth of [`Dtf::region_into`]: returns the accepted m and the factor
     /// that normalises the accepted coefficients left in `s.w`.
-    fn grow(&self, l: &Layer<'_>, x: usize, y: usize, s: &mut Scratch) -> (u32, f64) {
+    fn grow(&self, x: usize, y: usize, s: &mut Scratch) -> (u32, f64) {
         let (w, h) = (self.width as isize, self.height as isize);
         let p = y * self.width + x;
         s.cand.clear();
@@ -516,7 +400,7 @@ impl Dtf {
         // sigma = 0: no Monte-Carlo error to trade for bias, so filtering can only hurt
         // (and sqrt(N) / (3 sigma) would divide by zero).
         let big_n = self.n_ind[p];
-        let sg = l.sigma[p];
+        let sg = self.sigma_f.get(p).copied().unwrap_or(self.sigma[p]);
         if big_n == 0 || !(sg > 0.0 && sg.is_finite()) {
             return (1, inv_acc);
         }
@@ -525,7 +409,7 @@ impl Dtf {
             None => f64::INFINITY,
         };
         // (N_eff: with light paths of their own C_i's noise is below sigma / sqrt(N))
-        let sqrt_n = l.n[p].sqrt();
+        let sqrt_n = self.n_eff[p].sqrt();
         let active_set = self.params.clamp == Clamp::ActiveSet;
 
         // Current (clipped, inclusive) window and sum_r Delta_r, both grown incrementally:
@@ -537,7 +421,7 @@ impl Dtf {
         let mut f0_old = 1.0;
         let mut m_acc = 1;
 
-        for m in 2..=l.m_max {
+        for m in 2..=self.params.m_max {
             let off = ((m - 1) / 2) as isize;
             let nx0 = (px - off).max(0);
             let nx1 = (px - off + m as isize - 1).min(w - 1);
@@ -561,7 +445,7 @@ impl Dtf {
                         continue;
                     }
                     // Delta_q = ||C_d[p] - C_d[q]||.
-                    let delta = self.dep_delta(l, p, q).max(self.guard_delta(l, p, q));
+                    let delta = self.dep_delta(p, q).max(self.guard_delta(p, q));
                     sum_delta += delta;
                     let (dx, dy) = ((qx - px) as i32, (qy - py) as i32);
                     s.cand.push(Cand {
@@ -644,7 +528,7 @@ impl Dtf {
             // f*_new[0] = f^+[0] d(0) / sum_r f^+[r-p] d(r-p): accept the m-window only if
             // the primary weight drops by at least Delta f[0]_min.
             let f0_new = s.tmp[0] / sum;
-            if f0_old - f0_new < l.df0_min {
+            if f0_old - f0_new < self.params.df0_min as f64 {
                 return (m_acc, inv_acc);
             }
             // Keep the accepted coefficients unnormalised (normalised once, at the end).
@@ -659,72 +543,54 @@ impl Dtf {
     /// Region forming, filtering and display for every pixel (in parallel).
     pub fn run(&self) -> DtfOutput {
         let t0 = Instant::now();
-        let splat = self.splat_layer();
         let per_pixel: Vec<PixelOut> = (0..self.width * self.height)
             .into_par_iter()
-            .map_init(
-                || (Scratch::default(), Scratch::default()),
-                |(s, s2), p| {
-                    let (x, y) = (p % self.width, p / self.width);
-                    let m = self.region_into(x, y, s);
-                    // C_i,filtered = sum_q f*[q-p] C_i[q]  (C_i[p] = 0 when N[p] = 0); with a
-                    // splat layer of its own, the camera means with these weights plus the
-                    // splat image with the splat layer's.
-                    let mut c = [0.0f64; 3];
-                    let ci = match (&splat, &self.splat) {
-                        (Some(l), Some(t)) => {
-                            self.layer_region_into(l, x, y, s2);
-                            for (&wq, cq) in s2.w.iter().zip(&s2.cand) {
-                                for (ch, v) in c.iter_mut().enumerate() {
-                                    *v += wq * t.ci[cq.idx][ch];
-                                }
+            .map_init(Scratch::default, |s, p| {
+                let (x, y) = (p % self.width, p / self.width);
+                let m = self.region_into(x, y, s);
+                // C_i,filtered = sum_q f*[q-p] C_i[q]  (C_i[p] = 0 when N[p] = 0).
+                let mut c = [0.0f64; 3];
+                for (&wq, cq) in s.w.iter().zip(&s.cand) {
+                    for (ch, v) in c.iter_mut().enumerate() {
+                        *v += wq * self.ci[cq.idx][ch];
+                    }
+                }
+                // C = (C_d' n + C_i N) / (n + N), C_d' as `DtfParams::cd_display` says
+                // (the paper's C_d with `paper_display`).
+                let scaled = |q: usize| {
+                    let g = self.cd_scale.get(q).copied().unwrap_or([1.0; 3]);
+                    let cd = self.cd[q];
+                    [cd[0] * g[0], cd[1] * g[1], cd[2] * g[2]]
+                };
+                let mode = if self.params.paper_display {
+                    CdDisplay::Scaled
+                } else {
+                    self.params.cd_display
+                };
+                let disp = match mode {
+                    CdDisplay::Scaled => combine(scaled(p), self.n_dep[p], c, self.n_ind[p]),
+                    CdDisplay::Filtered | CdDisplay::Mse => {
+                        let mut cdf = [0.0f64; 3];
+                        for (&wq, cq) in s.w.iter().zip(&s.cand) {
+                            let v = scaled(cq.idx);
+                            for (ch, o) in cdf.iter_mut().enumerate() {
+                                *o += wq * v[ch];
                             }
-                            &t.ci_cam
                         }
-                        _ => &self.ci,
-                    };
-                    for (&wq, cq) in s.w.iter().zip(&s.cand) {
-                        for (ch, v) in c.iter_mut().enumerate() {
-                            *v += wq * ci[cq.idx][ch];
+                        if mode == CdDisplay::Mse && self.n_ind[p] > 0 {
+                            let a =
+                                self.cd_share(p, s.w.iter().zip(&s.cand).map(|(&f, q)| (q.idx, f)));
+                            std::array::from_fn(|ch| a * cdf[ch] + (1.0 - a) * c[ch])
+                        } else {
+                            combine(cdf, self.n_dep[p], c, self.n_ind[p])
                         }
                     }
-                    // C = (C_d' n + C_i N) / (n + N), C_d' as `DtfParams::cd_display` says
-                    // (the paper's C_d with `paper_display`).
-                    let scaled = |q: usize| {
-                        let g = self.cd_scale.get(q).copied().unwrap_or([1.0; 3]);
-                        let cd = self.cd[q];
-                        [cd[0] * g[0], cd[1] * g[1], cd[2] * g[2]]
-                    };
-                    let mode = if self.params.paper_display {
-                        CdDisplay::Scaled
-                    } else {
-                        self.params.cd_display
-                    };
-                    let disp = match mode {
-                        CdDisplay::Scaled => combine(scaled(p), self.n_dep[p], c, self.n_ind[p]),
-                        CdDisplay::Filtered | CdDisplay::Mse => {
-                            let mut cdf = [0.0f64; 3];
-                            for (&wq, cq) in s.w.iter().zip(&s.cand) {
-                                let v = scaled(cq.idx);
-                                for (ch, o) in cdf.iter_mut().enumerate() {
-                                    *o += wq * v[ch];
-                                }
-                            }
-                            if mode == CdDisplay::Mse && self.n_ind[p] > 0 {
-                                let a = self
-                                    .cd_share(p, s.w.iter().zip(&s.cand).map(|(&f, q)| (q.idx, f)));
-                                std::array::from_fn(|ch| a * cdf[ch] + (1.0 - a) * c[ch])
-                            } else {
-                                combine(cdf, self.n_dep[p], c, self.n_ind[p])
-                            }
-                        }
-                        CdDisplay::None if self.n_ind[p] > 0 => c,
-                        CdDisplay::None => combine(scaled(p), self.n_dep[p], c, 0),
-                    };
-                    let f32s = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32];
-                    (m, s.w.len() as u32, s.w[0] as f32, f32s(c), f32s(disp))
-                },
-            )
+                    CdDisplay::None if self.n_ind[p] > 0 => c,
+                    CdDisplay::None => combine(scaled(p), self.n_dep[p], c, 0),
+                };
+                let f32s = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32];
+                (m, s.w.len() as u32, s.w[0] as f32, f32s(c), f32s(disp))
+            })
             .collect();
         let (w, h) = (self.width as u32, self.height as u32);
         let out = DtfOutput {
