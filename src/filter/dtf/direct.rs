@@ -32,11 +32,15 @@ pub fn rest_film(full: &Film, rest: &Film) -> Result<Film, String> {
         return Err("dtf: the rest film does not hold the whole film's samples".into());
     }
     let splats = match (&full.splats, &rest.splats) {
-        (Some(f), Some(r)) => {
-            let mut s = f.clone();
-            s.batch_sum.clone_from(&r.batch_sum);
-            Some(s)
-        }
+        // (field by field: not a copy of the whole film's batch sums to overwrite)
+        (Some(f), Some(r)) => Some(Box::new(crate::film::SplatFilm {
+            sum: f.sum.clone(),
+            light_paths: f.light_paths,
+            batch_n: f.batch_n.clone(),
+            batch_sum: r.batch_sum.clone(),
+            batch_splat: f.batch_splat.clone(),
+            batch_paths: f.batch_paths,
+        })),
         (f, _) => f.clone(),
     };
     Ok(Film {

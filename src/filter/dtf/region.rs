@@ -317,10 +317,10 @@ impl Dtf {
         (0..3)
             .map(|c| {
                 let d = a[c] - b[c];
-                let mean = (0..BATCHES).map(|j| bp[j][c] - bq[j][c]).sum::<f64>() / nb;
-                let ss = (0..BATCHES)
-                    .map(|j| (bp[j][c] - bq[j][c] - mean).powi(2))
-                    .sum::<f64>();
+                // the batch differences once (the same values, summed in the same order)
+                let diff: [f64; BATCHES] = std::array::from_fn(|j| bp[j][c] - bq[j][c]);
+                let mean = diff.iter().sum::<f64>() / nb;
+                let ss = diff.iter().map(|x| (x - mean).powi(2)).sum::<f64>();
                 let se2 = ss / (nb * (nb - 1.0));
                 if se2.is_finite() {
                     (d * d - k2 * se2).max(0.0).sqrt()
