@@ -238,11 +238,22 @@ fn max_pixels() -> Result<u64, String> {
 /// Decode a PNG or JPEG (format from the content) held in memory, within the image
 /// crate's default allocation limit (512 MiB).
 pub fn decode_8bit(bytes: &[u8]) -> Result<image::DynamicImage, String> {
-    image::ImageReader::new(std::io::Cursor::new(bytes))
+    decode_8bit_as(bytes, None)
+}
+
+/// [`decode_8bit`], with the format named by a file extension when the bytes do not say
+/// it themselves (TGA has no signature: Crytek's Sponza and other scenes of the McGuire
+/// collection use `.tga` textures).
+pub fn decode_8bit_as(bytes: &[u8], ext: Option<&str>) -> Result<image::DynamicImage, String> {
+    let mut r = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
-        .map_err(|e| e.to_string())?
-        .decode()
-        .map_err(|e| e.to_string())
+        .map_err(|e| e.to_string())?;
+    if r.format().is_none() {
+        if let Some(f) = ext.and_then(image::ImageFormat::from_extension) {
+            r.set_format(f);
+        }
+    }
+    r.decode().map_err(|e| e.to_string())
 }
 
 /// Whether `path` names an image `read_image` reads: EXR, PFM, PNG, or Radiance HDR

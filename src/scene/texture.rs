@@ -1,4 +1,4 @@
-//! Image textures (map_Kd): PNG/JPEG decoded from sRGB to linear, EXR/PFM as stored (linear), bilinear lookup with
+//! Image textures (map_Kd): PNG/JPEG/TGA/BMP decoded from sRGB to linear, EXR/PFM as stored (linear), bilinear lookup with
 //! wrap-around, OBJ's v axis pointing up.
 
 use std::path::Path;
@@ -28,7 +28,7 @@ impl Texture {
         }
         // through `input`: only regular files, within the input limit
         let bytes = crate::input::read_bytes(path)?;
-        let img = crate::image_io::decode_8bit(&bytes)
+        let img = crate::image_io::decode_8bit_as(&bytes, ext.as_deref())
             .map_err(|e| format!("{}: cannot read texture: {e}", path.display()))?
             .to_rgb8();
         let (width, height) = img.dimensions();
@@ -89,5 +89,34 @@ impl Texture {
                 (a[i] * (1.0 - fx) + b[i] * fx) * (1.0 - fy) + (c[i] * (1.0 - fx) + d[i] * fx) * fy;
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// TGA (no signature: read by its extension) and BMP textures decode like PNG:
+    /// sRGB to linear, top row first.
+    #[test]
+    fn tga_and_bmp_textures_load() {
+        let dir = std::env::temp_dir().join(format!("kalos-tex-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let img =
+            image::RgbImage::from_fn(2, 2, |x, y| image::Rgb([255 * x as u8, 128, 255 * y as u8]));
+        for (ext, fmt) in [
+            ("tga", image::ImageFormat::Tga),
+            ("bmp", image::ImageFormat::Bmp),
+            ("png", image::ImageFormat::Png),
+        ] {
+            let path = dir.join(format!("t.{ext}"));
+            img.save_with_format(&path, fmt).unwrap();
+            let t = Texture::load(&path).unwrap_or_else(|e| panic!("{ext}: {e}"));
+            assert_eq!((t.width, t.height), (2, 2), "{ext}");
+            let mid = crate::image_io::srgb_decode(128.0 / 255.0);
+            assert_eq!(t.texels[0], [0.0, mid, 0.0], "{ext}");
+            assert_eq!(t.texels[3], [1.0, mid, 1.0], "{ext}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
