@@ -356,7 +356,12 @@ pub fn parse_mtl(
             // Dissolve: d 1 (Tr 0) is opaque; anything else asks for a see-through
             // surface, which kalos renders only as glass (illum 7).
             "d" | "Tr" => {
-                let v = v3(1)?[0];
+                // `d -halo f` (the MTL spec's orientation-dependent dissolve) is a dissolve too
+                let words = match rest.split_first() {
+                    Some((&"-halo", w)) if key == "d" => w,
+                    _ => rest,
+                };
+                let v = parse_vals(file, line_no, key, words, 1)?[0];
                 let opaque = if key == "d" { v >= 1.0 } else { v <= 0.0 };
                 if let Some(d) = dissolve.last_mut() {
                     *d = (!opaque).then(|| (format!("{key} {v}"), line_no));
@@ -567,7 +572,8 @@ mod tests {
         let text = "newmtl a\nKd 0.5 0.5 0.5\nmap_Bump -bm 0.3 a n.png\nmap_d leaf.png\nd 0.25\n\
                     newmtl b\nKd 0.5 0.5 0.5\nbump b.png\nmap_Bump c.png\nTr 0\nd 1\n\
                     newmtl c\nKs 1 1 1\nNi 1.5\nd 0.1\nillum 7\n\
-                    newmtl w\nKd 0.2 0.2 0.2\nillum 4\nmap_Ka amb.png\n";
+                    newmtl w\nKd 0.2 0.2 0.2\nillum 4\nmap_Ka amb.png\n\
+                    newmtl h\nKd 0.5 0.5 0.5\nd -halo 0.6\n";
         let (m, notes) = parse_mtl(text, "x.mtl", Path::new(".")).unwrap();
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert_eq!(
@@ -586,6 +592,11 @@ mod tests {
             m[3].notes[0].starts_with("illum 4 (transparency"),
             "{:?}",
             m[3].notes
+        );
+        assert!(
+            m[4].notes[0].starts_with("d 0.6 (line 23)"),
+            "{:?}",
+            m[4].notes
         );
     }
 }
