@@ -569,21 +569,14 @@ fn compare(
     serde_json::to_string(&m).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
-fn u32s(data: &[u8], pixels: usize, what: &str) -> PyResult<Vec<u32>> {
-    if data.len() != pixels * 4 {
-        return Err(PyValueError::new_err(format!(
-            "{what}: {} bytes, {pixels} pixels need {}",
-            data.len(),
-            pixels * 4
-        )));
-    }
-    Ok(data
-        .chunks_exact(4)
-        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect())
-}
-
-fn f32s(data: &[u8], pixels: usize, what: &str) -> Result<Vec<f32>, String> {
+/// One little-endian 4-byte word per pixel (`counts` as u32, K[p] as f32), checked for
+/// the film's pixel count.
+fn words<T>(
+    data: &[u8],
+    pixels: usize,
+    what: &str,
+    from: fn([u8; 4]) -> T,
+) -> Result<Vec<T>, String> {
     if data.len() != pixels * 4 {
         return Err(format!(
             "{what}: {} bytes, {pixels} pixels need {}",
@@ -593,7 +586,7 @@ fn f32s(data: &[u8], pixels: usize, what: &str) -> Result<Vec<f32>, String> {
     }
     Ok(data
         .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .map(|b| from([b[0], b[1], b[2], b[3]]))
         .collect())
 }
 
@@ -643,14 +636,14 @@ fn render_dtf_part<'py>(
         let set = job.settings(&sc);
         let pixels = set.width as usize * set.height as usize;
         let per_pixel = match &counts {
-            Some(c) => Some(u32s(c, pixels, "counts").map_err(|e| e.to_string())?),
+            Some(c) => Some(words(c, pixels, "counts", u32::from_le_bytes)?),
             None => None,
         };
         let k = match &k {
             Some(b) => Some(Arc::new(LtRatio {
                 width: set.width,
                 height: set.height,
-                k: f32s(b, pixels, "k")?,
+                k: words(b, pixels, "k", f32::from_le_bytes)?,
             })),
             None => None,
         };
@@ -849,7 +842,8 @@ impl kalos::pipeline::DtfPasses for PyPasses<'_> {
         String,
     > {
         let (film, rest, rays, c) = self.parts(&pass)?;
-        Ok((film, rest.expect("a rest pass's rest film"), rays, c))
+        let rest = rest.ok_or("dtf: run_rest was given a pass without `rest`")?;
+        Ok((film, rest, rays, c))
     }
 }
 

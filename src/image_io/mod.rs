@@ -235,16 +235,11 @@ fn max_pixels() -> Result<u64, String> {
     Ok(crate::input::max_input_bytes()? / 12)
 }
 
-/// Decode a PNG or JPEG (format from the content) held in memory, within the image
-/// crate's default allocation limit (512 MiB).
-pub fn decode_8bit(bytes: &[u8]) -> Result<image::DynamicImage, String> {
-    decode_8bit_as(bytes, None)
-}
-
-/// [`decode_8bit`], with the format named by a file extension when the bytes do not say
-/// it themselves (TGA has no signature: Crytek's Sponza and other scenes of the McGuire
-/// collection use `.tga` textures).
-pub fn decode_8bit_as(bytes: &[u8], ext: Option<&str>) -> Result<image::DynamicImage, String> {
+/// Decode an 8-bit image held in memory (PNG, JPEG, TGA, BMP), within the image crate's
+/// default allocation limit (512 MiB). The format comes from the content, else from `ext`,
+/// the file's extension (TGA has no signature; older game-asset scenes such as Crytek's
+/// original Sponza ship `.tga` textures).
+pub fn decode_8bit(bytes: &[u8], ext: Option<&str>) -> Result<image::DynamicImage, String> {
     let mut r = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
@@ -303,7 +298,7 @@ pub fn read_image(path: &Path) -> Result<RgbImage, String> {
         Format::Exr => read_exr(&bytes).map_err(|e| fail(&e))?,
         Format::Pfm => read_pfm(&bytes).map_err(|e| fail(&e))?,
         Format::Png => {
-            let im = decode_8bit(&bytes).map_err(|e| fail(&e))?.to_rgb32f();
+            let im = decode_8bit(&bytes, None).map_err(|e| fail(&e))?.to_rgb32f();
             let (w, h) = im.dimensions();
             let data = im
                 .pixels()

@@ -122,6 +122,15 @@ pub struct PointLightDesc {
 }
 
 impl MaterialDesc {
+    /// "file:line: material 'name'" (without the place when it has none), for its
+    /// warnings and errors.
+    pub fn described(&self) -> String {
+        match &self.source {
+            Some(at) => format!("{at}: material '{}'", self.name),
+            None => format!("material '{}'", self.name),
+        }
+    }
+
     /// MTL defaults: grey diffuse, no specular, no emission.
     pub fn named(name: &str) -> Self {
         MaterialDesc {
@@ -252,10 +261,10 @@ impl Scene {
                     Some(i) => i as u32,
                     None => {
                         // (the error names the material that asks for the texture)
-                        textures.push(Texture::load(p).map_err(|e| match &m.source {
-                            Some(at) => format!("{at}: material '{}': texture {e}", m.name),
-                            None => format!("material '{}': texture {e}", m.name),
-                        })?);
+                        textures.push(
+                            Texture::load(p)
+                                .map_err(|e| format!("{}: texture {e}", m.described()))?,
+                        );
                         tex_paths.push(p.clone());
                         textures.len() as u32 - 1
                     }
@@ -275,17 +284,8 @@ impl Scene {
                 material_warnings.push(w);
             }
             let bsdf = match &m.model {
-                Some(model) => bsdf_of_model(model, kd).map_err(|e| {
-                    format!(
-                        "{}material '{}' ({}): {e}",
-                        m.source
-                            .as_deref()
-                            .map(|s| format!("{s}: "))
-                            .unwrap_or_default(),
-                        m.name,
-                        model.plugin()
-                    )
-                })?,
+                Some(model) => bsdf_of_model(model, kd)
+                    .map_err(|e| format!("{} ({}): {e}", m.described(), model.plugin()))?,
                 None => Bsdf::from_mtl(kd, ks, m.ns, m.ni, m.illum),
             };
             let (emission, emission_table) = if m.emit_one_minus_albedo {
@@ -620,13 +620,6 @@ fn conserve_energy(
             tex = Some(textures.len() as u32 - 1);
         }
     }
-    let warning = (!notes.is_empty()).then(|| {
-        let at = m
-            .source
-            .as_ref()
-            .map(|s| format!("{s}: "))
-            .unwrap_or_default();
-        format!("{at}material '{}': {}", m.name, notes.join("; "))
-    });
+    let warning = (!notes.is_empty()).then(|| format!("{}: {}", m.described(), notes.join("; ")));
     (kd, ks, tex, warning)
 }

@@ -237,7 +237,7 @@ fn principled(
 }
 
 /// Statements that change how a surface looks and that kalos does not render, said once
-/// per file with the first line and how many materials have each: a bump or alpha map
+/// per file with the first line and how often each occurs: a bump or alpha map
 /// left out changes the image, and the brief forbids doing that without a word. (Map
 /// statements of the ambient term, which a global-illumination render has no use for,
 /// and bookkeeping such as `Ka` without `illum 3` are not listed.)
@@ -272,8 +272,8 @@ pub fn parse_mtl(
     let mut pbr: Vec<Pbr> = Vec::new();
     // (line of newmtl, line of Ni) of the current material
     let mut lines: Vec<(usize, Option<usize>)> = Vec::new();
-    // (statement, first line, materials using it) of what is not rendered
-    let mut ignored: Vec<(&str, usize, usize)> = Vec::new();
+    // (statement, what it is, first line, occurrences) of what is not rendered
+    let mut ignored: Vec<(&str, &str, usize, usize)> = Vec::new();
     // (d or Tr, its line) of the current material when it asks for transparency
     let mut dissolve: Vec<Option<(String, usize)>> = Vec::new();
     for (i, raw) in text.lines().enumerate() {
@@ -302,10 +302,10 @@ pub fn parse_mtl(
             dissolve.push(None);
             continue;
         }
-        if let Some(&(k, _)) = NOT_RENDERED.iter().find(|(k, _)| *k == key) {
+        if let Some(&(k, what)) = NOT_RENDERED.iter().find(|(k, _)| *k == key) {
             match ignored.iter_mut().find(|(i, ..)| *i == k) {
-                Some(e) => e.2 += 1,
-                None => ignored.push((k, line_no, 1)),
+                Some(e) => e.3 += 1,
+                None => ignored.push((k, what, line_no, 1)),
             }
             continue;
         }
@@ -412,11 +412,7 @@ pub fn parse_mtl(
     if !ignored.is_empty() {
         let list: Vec<String> = ignored
             .iter()
-            .map(|(k, line, n)| {
-                let what = NOT_RENDERED
-                    .iter()
-                    .find(|(s, _)| s == k)
-                    .map_or("", |e| e.1);
+            .map(|(k, what, line, n)| {
                 let times = if *n == 1 {
                     String::new()
                 } else {

@@ -28,7 +28,7 @@ impl Texture {
         }
         // through `input`: only regular files, within the input limit
         let bytes = crate::input::read_bytes(path)?;
-        let img = crate::image_io::decode_8bit_as(&bytes, ext.as_deref())
+        let img = crate::image_io::decode_8bit(&bytes, ext.as_deref())
             .map_err(|e| format!("{}: cannot read texture: {e}", path.display()))?
             .to_rgb8();
         let (width, height) = img.dimensions();

@@ -69,17 +69,6 @@ impl<T: Copy> TriAttr<T> {
             TriAttr::Sparse { index, .. } => Some(index.as_ptr().wrapping_add(i) as *const u8),
         }
     }
-
-    /// Bytes held.
-    pub fn memory_bytes(&self) -> usize {
-        match self {
-            TriAttr::Absent => 0,
-            TriAttr::Dense(v) => std::mem::size_of_val(v.as_slice()),
-            TriAttr::Sparse { index, values } => {
-                std::mem::size_of_val(index.as_slice()) + std::mem::size_of_val(values.as_slice())
-            }
-        }
-    }
 }
 
 #[cfg(test)]
@@ -107,6 +96,5 @@ mod tests {
             TriAttr::from_options(vec![Some(1u8); 4]),
             TriAttr::Dense(_)
         ));
-        assert_eq!(TriAttr::<u8>::from_options(vec![None; 4]).memory_bytes(), 0);
     }
 }
