@@ -1116,9 +1116,10 @@ fn advise_huge_pages<T>(v: &Vec<T>) {
 /// SAH cost of visiting an 8-wide node, relative to testing one triangle
 /// packet (both per unit of half area), for the collapse's dynamic programme.
 /// A node is four cache lines and a packet three, and a node also sorts the
-/// children it pushes. Measured on the 1M-triangle mesh (render A/B, leaves of
-/// up to eight triangles): 2 and 1.5 alike, 1 and 3 slower; 3 also made the
-/// Cornell box 2% slower.
+/// children it pushes. Render A/Bs on a shared machine (noise of several
+/// percent; docs/results/throughput/bvh-bench-fill.txt): 1.5 and 2 alike, 1
+/// and 3 no better on the 1M-triangle mesh; 3 (one node of 8 children, two
+/// two-packet leaves) made the Cornell box 2% slower.
 const C_NODE: f32 = 2.0;
 
 /// Per BVH2 node, the least SAH cost of its subtree as at most `j + 1` child
