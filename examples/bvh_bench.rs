@@ -316,6 +316,15 @@ fn bench_kalos(name: &str, pool: &rayon::ThreadPool, tris: &[[Vec3; 3]], rays: &
         bvh.node_count(),
         bvh.memory_bytes() as f64 / (1 << 20) as f64
     );
+    let (nodes, leaves, packets) = bvh.shape();
+    println!(
+        "[kalos {name}] {nodes} 8-wide nodes ({:.1} MiB), {:.2} children per node, \
+         {leaves} leaves in {packets} packets ({:.1} MiB, {:.2} triangles per packet)",
+        (nodes * 256) as f64 / (1 << 20) as f64,
+        (nodes.max(1) - 1 + leaves) as f64 / nodes.max(1) as f64,
+        (packets * 160) as f64 / (1 << 20) as f64,
+        tris.len() as f64 / packets as f64,
+    );
     let r = time_rays(pool, &rays.closest, |r| {
         bvh.intersect(r, f32::INFINITY).map(|h| h.t)
     });

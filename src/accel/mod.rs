@@ -3,8 +3,14 @@
 //! Build: binned SAH (16 bins, all three axes, costs counted in 4-triangle
 //! blocks) into a flattened BVH2 of 32-byte nodes, subtrees built in parallel
 //! with rayon; the BVH2 is then collapsed into an 8-wide BVH (`Node8`, 256
-//! bytes: SoA child boxes + child references) whose leaves are single packets
-//! of up to four triangles in SoA Möller–Trumbore form (`Tri4`, v0/e1/e2).
+//! bytes: SoA child boxes + child references) whose leaves are one or two
+//! consecutive packets of up to four triangles in SoA Möller–Trumbore form
+//! (`Tri4`, v0/e1/e2). The collapse is SAH-driven (the dynamic programme of
+//! Ylitie, Karras & Laine 2017): which BVH2 nodes become 8-wide nodes, which
+//! become leaves (a BVH2 subtree of up to eight triangles may become one
+//! leaf) and how a node's eight child slots are shared out are chosen for the
+//! least SAH cost, which fills the nodes (about 7.3 children on average on a
+//! 1M-triangle mesh, against 4.1 for opening the largest child greedily).
 //!
 //! Traversal: one ray at a time, the 8 boxes of a node per slab test (one
 //! AVX2 test, or two 4-wide glam `Vec4` ones: SSE2 on x86-64, NEON on
@@ -313,23 +319,31 @@ struct Node8 {
     child: [u32; WIDTH],
 }
 
-/// Child reference flag: a leaf, encoded as `LEAF | packet << 2 | (count - 1)`
-/// (its triangles are the first `count` lanes of `Tri4` packet `packet`).
-/// Otherwise a `Node8` index.
+/// Child reference flag: a leaf, encoded as `LEAF | packet << 3 | (count - 1)`
+/// (its `count <= 8` triangles fill `Tri4` packets `packet ..` in order, four
+/// to a packet but the last). Otherwise a `Node8` index.
 const LEAF: u32 = 1 << 31;
-const _: () = assert!(build::MAX_LEAF <= 4);
+/// Most triangles a leaf holds (two packets).
+const MAX_LEAF_TRIS: u32 = 8;
+const _: () = assert!(build::MAX_LEAF as u32 <= MAX_LEAF_TRIS);
 const _: () = assert!(std::mem::size_of::<Tri4>() == 160);
 
 #[inline(always)]
 fn leaf_ref(first: u32, count: u32) -> u32 {
-    debug_assert!((1..=4).contains(&count) && first < 1 << 29);
-    LEAF | first << 2 | (count - 1)
+    debug_assert!((1..=MAX_LEAF_TRIS).contains(&count) && first < 1 << 28);
+    LEAF | first << 3 | (count - 1)
 }
 
-/// Packet index and lane mask of a leaf reference.
+/// First packet and triangle count of a leaf reference.
 #[inline(always)]
-fn leaf_packet(r: u32) -> (usize, u32) {
-    (((r & !LEAF) >> 2) as usize, (2u32 << (r & 3)) - 1)
+fn leaf_packets(r: u32) -> (usize, u32) {
+    (((r & !LEAF) >> 3) as usize, (r & 7) + 1)
+}
+
+/// Lane mask of a packet holding the next `left` (>= 1) triangles of a leaf.
+#[inline(always)]
+fn lane_mask(left: u32) -> u32 {
+    (1u32 << left.min(4)) - 1
 }
 
 /// Bounding volume hierarchy over a triangle soup.
@@ -342,7 +356,7 @@ pub struct Bvh {
     /// Traversal stack entries a query may need (computed at build time).
     stack_needed: usize,
     leaf_count: usize,
-    /// Triangle packets, one per leaf, in traversal order.
+    /// Triangle packets (one or two per leaf), in traversal order.
     tris: Vec<Tri4>,
     /// Instruction set the queries run with.
     isa: Isa,
@@ -638,38 +652,46 @@ impl Bvh {
                 batching: None,
             };
         }
-        assert!(refs.len() < 1 << 29, "too many triangles for one BVH");
+        assert!(refs.len() < 1 << 28, "too many triangles for one BVH");
         let nodes2 = build::build(&mut refs, &mut ids);
         drop(refs);
         let bounds = Bounds3 {
             min: nodes2[0].min,
             max: nodes2[0].max,
         };
+        let plan = plan(&nodes2);
         let mut c = Collapse {
             n2: &nodes2,
+            plan: &plan,
             ids: &ids,
             input: tris,
-            nodes: Vec::with_capacity(nodes2.len() / 2 + 1),
+            nodes: Vec::with_capacity(nodes2.len() / 4 + 1),
             packets: Vec::with_capacity(nodes2.len() / 2 + 1),
+            leaves: 0,
         };
         // Before the arrays are written, so the kernel can back them with huge
         // pages as they are first touched.
         advise_huge_pages(&c.nodes);
         advise_huge_pages(&c.packets);
-        let (root, stack_needed) = c.collapse(0);
+        let (root, stack_needed) = c.slot(0);
         let Collapse {
-            mut nodes, packets, ..
+            mut nodes,
+            mut packets,
+            leaves,
+            ..
         } = c;
+        drop(plan);
         // Every 8-wide node spans at least one BVH2 level on every path and
         // the BVH2 depth is bounded by the builder, so this always holds.
         assert!(stack_needed <= LARGE_STACK);
         nodes.shrink_to_fit();
+        packets.shrink_to_fit();
         Bvh {
             nodes,
             root,
             bounds,
             stack_needed,
-            leaf_count: packets.len(),
+            leaf_count: leaves,
             tris: packets,
             isa: Isa::chosen(),
             batching: None,
@@ -866,29 +888,37 @@ impl Bvh {
                 return false;
             }
         } else {
-            let (p, valid) = leaf_packet(cur);
-            let (mut m, t, u, v) = self.tris[p].intersect(&q.r, q.t_best, valid);
-            if m != 0 {
-                if q.any {
-                    q.best.0 = 0;
-                    return true;
-                }
-                let t = t.to_array();
-                let mut lane = m.trailing_zeros() as usize;
-                m &= m - 1;
-                while m != 0 {
-                    let i = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    if t[i] < t[lane] {
-                        lane = i;
+            let (p, count) = leaf_packets(cur);
+            let mut k = 0;
+            loop {
+                let valid = lane_mask(count - 4 * k as u32);
+                let (mut m, t, u, v) = self.tris[p + k].intersect(&q.r, q.t_best, valid);
+                if m != 0 {
+                    if q.any {
+                        q.best.0 = 0;
+                        return true;
                     }
+                    let t = t.to_array();
+                    let mut lane = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        if t[i] < t[lane] {
+                            lane = i;
+                        }
+                    }
+                    q.t_best = t[lane];
+                    q.best = (
+                        (4 * (p + k) + lane) as u32,
+                        u.to_array()[lane],
+                        v.to_array()[lane],
+                    );
                 }
-                q.t_best = t[lane];
-                q.best = (
-                    (4 * p + lane) as u32,
-                    u.to_array()[lane],
-                    v.to_array()[lane],
-                );
+                k += 1;
+                if 4 * k as u32 >= count {
+                    break;
+                }
             }
         }
         // Pop the next node that may still hold a closer hit.
@@ -1006,9 +1036,11 @@ impl Bvh {
             let (p, lines) = if r & LEAF == 0 {
                 (self.nodes.as_ptr().wrapping_add(r as usize) as *const i8, 4)
             } else {
+                // 160 bytes aligned to 32 span three lines, 320 six.
+                let (first, count) = leaf_packets(r);
                 (
-                    self.tris.as_ptr().wrapping_add(leaf_packet(r).0) as *const i8,
-                    3,
+                    self.tris.as_ptr().wrapping_add(first) as *const i8,
+                    if count > 4 { 6 } else { 3 },
                 )
             };
             for l in 0..lines {
@@ -1022,6 +1054,12 @@ impl Bvh {
     /// Bounds of all non-degenerate triangles (empty for an empty BVH).
     pub fn bounds(&self) -> Bounds3 {
         self.bounds
+    }
+
+    /// Shape of the tree: (8-wide nodes, leaves, triangle packets). The
+    /// nodes hold `nodes - 1 + leaves` children.
+    pub fn shape(&self) -> (usize, usize, usize) {
+        (self.nodes.len(), self.leaf_count, self.tris.len())
     }
 
     /// Number of nodes: 8-wide interior nodes plus leaves (leaves are stored
@@ -1075,58 +1113,157 @@ fn advise_huge_pages<T>(v: &Vec<T>) {
     let _ = v;
 }
 
+/// SAH cost of visiting an 8-wide node, relative to testing one triangle
+/// packet (both per unit of half area), for the collapse's dynamic programme.
+/// A node is four cache lines and a packet three, and a node also sorts the
+/// children it pushes. Render A/Bs on a shared machine (noise of several
+/// percent; docs/results/throughput/bvh-bench-fill.txt): 1.5 and 2 alike, 1
+/// and 3 no better on the 1M-triangle mesh; 3 (one node of 8 children, two
+/// two-packet leaves) made the Cornell box 2% slower.
+const C_NODE: f32 = 2.0;
+
+/// Per BVH2 node, the least SAH cost of its subtree as at most `j + 1` child
+/// slots of an 8-wide node (`cost[j]`, each slot a leaf or an 8-wide node),
+/// and its triangle count. Costs are in units of one packet test over the
+/// box's half area: a leaf of `n` triangles costs `ceil(n / 4)` times its
+/// half area, an 8-wide node `C_NODE` times its half area plus its children.
+#[derive(Clone, Copy)]
+struct Plan {
+    cost: [f32; WIDTH],
+    tris: u32,
+    /// Whether the subtree as one slot is best a leaf.
+    leaf: bool,
+}
+
+/// Half area of a BVH2 node's box.
+#[inline(always)]
+fn area2(n: &Node) -> f32 {
+    Bounds3 {
+        min: n.min,
+        max: n.max,
+    }
+    .half_area()
+}
+
+/// The best split of `j` slots (2 <= j <= 8) between the two children of an
+/// interior BVH2 node: (slots of the left child, cost); the first on ties.
+#[inline(always)]
+fn best_split(plan: &[Plan], left: usize, j: usize) -> (usize, f32) {
+    let (l, r) = (&plan[left].cost, &plan[left + 1].cost);
+    let mut best = (1, l[0] + r[j - 2]);
+    for k in 2..j {
+        let c = l[k - 1] + r[j - k - 1];
+        if c < best.1 {
+            best = (k, c);
+        }
+    }
+    best
+}
+
+/// The dynamic programme of Ylitie, Karras & Laine (2017, "Efficient
+/// incoherent ray traversal on GPUs through compressed wide BVHs"), bottom-up
+/// over the BVH2 (children always follow their parent in `n2`).
+fn plan(n2: &[Node]) -> Vec<Plan> {
+    let mut plan = vec![
+        Plan {
+            cost: [0.0; WIDTH],
+            tris: 0,
+            leaf: false,
+        };
+        n2.len()
+    ];
+    for i in (0..n2.len()).rev() {
+        let n = &n2[i];
+        let a = area2(n);
+        let tris = if n.is_leaf() {
+            n.count
+        } else {
+            plan[n.a as usize].tris + plan[n.a as usize + 1].tris
+        };
+        let leaf = if tris <= MAX_LEAF_TRIS {
+            a * tris.div_ceil(4) as f32
+        } else {
+            f32::INFINITY
+        };
+        let mut cost = [leaf; WIDTH];
+        let mut is_leaf = true;
+        if !n.is_leaf() {
+            let node = a * C_NODE + best_split(&plan, n.a as usize, WIDTH).1;
+            // (Infinite or NaN areas must not make a leaf of too many triangles.)
+            is_leaf = tris <= MAX_LEAF_TRIS && leaf <= node;
+            cost[0] = leaf.min(node);
+            for j in 2..=WIDTH {
+                cost[j - 1] = cost[0].min(best_split(&plan, n.a as usize, j).1);
+            }
+        }
+        plan[i] = Plan {
+            cost,
+            tris,
+            leaf: is_leaf,
+        };
+    }
+    plan
+}
+
 /// BVH2 → 8-wide BVH conversion state.
 struct Collapse<'a> {
     n2: &'a [Node],
+    plan: &'a [Plan],
     /// Input triangle indices in BVH2 leaf order.
     ids: &'a [u32],
     input: &'a [[Vec3; 3]],
     nodes: Vec<Node8>,
     packets: Vec<Tri4>,
+    leaves: usize,
 }
 
 impl Collapse<'_> {
-    /// Collapses the BVH2 subtree at `i` into 8-wide nodes and triangle
-    /// packets, both laid out depth-first. Returns its reference and the
+    /// Appends to `out` the BVH2 nodes that, as at most `j` child slots, cover
+    /// the subtree at `i` at least cost.
+    fn distribute(&self, i: usize, j: usize, out: &mut Vec<usize>) {
+        let n = &self.n2[i];
+        let p = &self.plan[i];
+        if j == 1 || n.is_leaf() || p.cost[j - 1] == p.cost[0] {
+            out.push(i);
+            return;
+        }
+        let (k, _) = best_split(self.plan, n.a as usize, j);
+        self.distribute(n.a as usize, k, out);
+        self.distribute(n.a as usize + 1, j - k, out);
+    }
+
+    /// Turns the BVH2 subtree at `i` into one child slot: a leaf of its
+    /// triangles or an 8-wide node, whichever the plan found cheaper; nodes
+    /// and packets are laid out depth-first. Returns its reference and the
     /// number of traversal stack entries a query below it may need.
-    fn collapse(&mut self, i: usize) -> (u32, usize) {
+    fn slot(&mut self, i: usize) -> (u32, usize) {
         let n2 = self.n2;
         let n = &n2[i];
-        if n.is_leaf() {
-            let ids = &self.ids[n.a as usize..(n.a + n.count) as usize];
-            let mut tris = [Tri::new(&[Vec3::ZERO; 3]); 4];
-            for (t, &i) in tris.iter_mut().zip(ids) {
-                *t = Tri::new(&self.input[i as usize]);
+        let p = self.plan[i];
+        if p.leaf {
+            // The subtree's triangles are contiguous in leaf order.
+            let mut first = i;
+            while !n2[first].is_leaf() {
+                first = n2[first].a as usize;
             }
-            let p = self.packets.len() as u32;
-            self.packets.push(Tri4::new(&tris[..ids.len()], ids));
-            return (leaf_ref(p, n.count), 0);
-        }
-        // Open the interior child with the largest surface area until there
-        // are eight children (or only leaves).
-        let area = |k: usize| {
-            Bounds3 {
-                min: n2[k].min,
-                max: n2[k].max,
+            let first = n2[first].a as usize;
+            let ids = &self.ids[first..first + p.tris as usize];
+            let r = leaf_ref(self.packets.len() as u32, p.tris);
+            for chunk in ids.chunks(4) {
+                let mut tris = [Tri::new(&[Vec3::ZERO; 3]); 4];
+                for (t, &i) in tris.iter_mut().zip(chunk) {
+                    *t = Tri::new(&self.input[i as usize]);
+                }
+                self.packets.push(Tri4::new(&tris[..chunk.len()], chunk));
             }
-            .half_area()
-        };
-        let mut kids = [0usize; WIDTH];
-        kids[..2].copy_from_slice(&[n.a as usize, n.a as usize + 1]);
-        let mut nk = 2;
-        while nk < WIDTH {
-            let Some(pos) = (0..nk)
-                .filter(|&p| !n2[kids[p]].is_leaf())
-                .max_by(|&a, &b| area(kids[a]).total_cmp(&area(kids[b])))
-            else {
-                break;
-            };
-            let k = kids[pos];
-            kids[pos] = n2[k].a as usize;
-            kids[nk] = n2[k].a as usize + 1;
-            nk += 1;
+            self.leaves += 1;
+            return (r, 0);
         }
-        let kids = &kids[..nk];
+        let mut kids = Vec::with_capacity(WIDTH);
+        let (k, _) = best_split(self.plan, n.a as usize, WIDTH);
+        self.distribute(n.a as usize, k, &mut kids);
+        self.distribute(n.a as usize + 1, WIDTH - k, &mut kids);
+        debug_assert!((2..=WIDTH).contains(&kids.len()));
         let idx = self.nodes.len();
         // Unused lanes get the box [+inf, +inf], which no ray overlaps.
         let mut b = [[f32::INFINITY; WIDTH]; 6];
@@ -1142,7 +1279,7 @@ impl Collapse<'_> {
         });
         let mut stack_needed = 0;
         for (lane, &k) in kids.iter().enumerate() {
-            let (r, s) = self.collapse(k);
+            let (r, s) = self.slot(k);
             self.nodes[idx].child[lane] = r;
             stack_needed = stack_needed.max(s);
         }

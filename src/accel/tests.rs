@@ -169,21 +169,25 @@ fn check_structure(bvh: &Bvh, input: &[[Vec3; 3]]) {
     while let Some((r, min, max)) = stack.pop() {
         if r & LEAF != 0 {
             leaves += 1;
-            let (p, valid) = leaf_packet(r);
-            let t = &bvh.tris[p];
-            for lane in 0..4 {
-                let id = bvh.tris[p].ids[lane];
-                if valid & (1 << lane) == 0 {
-                    assert_eq!(id, u32::MAX);
-                    continue;
-                }
-                seen[id as usize] += 1;
-                let get = |v: &[Vec4; 3]| Vec3::new(v[0][lane], v[1][lane], v[2][lane]);
-                let (v0, e1, e2) = (get(&t.v0), get(&t.e1), get(&t.e2));
-                let tri = Tri::new(&input[id as usize]);
-                assert_eq!((v0, e1, e2), (tri.v0, tri.e1, tri.e2));
-                for p in [v0, v0 + e1, v0 + e2] {
-                    assert!(inside(p, min, max));
+            let (first, count) = leaf_packets(r);
+            for k in 0..count.div_ceil(4) as usize {
+                let p = first + k;
+                let valid = lane_mask(count - 4 * k as u32);
+                let t = &bvh.tris[p];
+                for lane in 0..4 {
+                    let id = bvh.tris[p].ids[lane];
+                    if valid & (1 << lane) == 0 {
+                        assert_eq!(id, u32::MAX);
+                        continue;
+                    }
+                    seen[id as usize] += 1;
+                    let get = |v: &[Vec4; 3]| Vec3::new(v[0][lane], v[1][lane], v[2][lane]);
+                    let (v0, e1, e2) = (get(&t.v0), get(&t.e1), get(&t.e2));
+                    let tri = Tri::new(&input[id as usize]);
+                    assert_eq!((v0, e1, e2), (tri.v0, tri.e1, tri.e2));
+                    for p in [v0, v0 + e1, v0 + e2] {
+                        assert!(inside(p, min, max));
+                    }
                 }
             }
         } else {
@@ -246,6 +250,20 @@ fn matches_brute_force_large_parallel_build() {
     let mut rng = Rng::new(6);
     let tris = soup(&mut rng, 40_000, true);
     check_against_brute(&tris, 500, 66);
+}
+
+/// The SAH collapse fills the 8-wide nodes and makes some leaves of two
+/// packets (which the structure check and the brute force above cover).
+#[test]
+fn collapse_fills_nodes_and_merges_leaves() {
+    let mut rng = Rng::new(7);
+    let tris = soup(&mut rng, 40_000, false);
+    let bvh = Bvh::build(&tris);
+    check_structure(&bvh, &tris);
+    let (nodes, leaves, packets) = bvh.shape();
+    assert!(packets > leaves, "no leaf of two packets");
+    let fill = (nodes - 1 + leaves) as f64 / nodes as f64;
+    assert!(fill > 6.0, "{fill} children per node");
 }
 
 /// Every instruction set returns the same hits, bit for bit, as the baseline

@@ -172,10 +172,14 @@ pub fn run(cli: Cli) -> Result<(), String> {
                     println!("camera       --camera {} ({})", c.to_arg(), i.camera_from);
                 }
                 println!("load         {:.3} s", i.load_seconds);
+                let (nodes8, leaves, packets) = s.bvh.shape();
                 println!(
-                    "bvh          {:.3} s, {} nodes, {:.1} MiB, traversal {}",
+                    "bvh          {:.3} s, {} nodes ({nodes8} 8-wide with {:.2} children on \
+                     average, {leaves} leaves in {packets} triangle packets), {:.1} MiB, \
+                     traversal {}",
                     i.bvh_seconds,
                     i.bvh_nodes,
+                    (nodes8.max(1) - 1 + leaves) as f64 / nodes8.max(1) as f64,
                     i.bvh_bytes as f64 / 1048576.0,
                     s.bvh.isa().name()
                 );
