@@ -150,9 +150,9 @@ pub struct DtfParams {
     #[arg(long = "dtf-mmax", default_value_t = 8)]
     pub m_max: u32,
     /// DTF: minimal decrease Delta f[0]_min of the primary weight f*[0] to grow a region
-    /// (paper: 0.01). With 0.01 a flat region stops near 6x6 to 7x7 pixels whatever
-    /// --dtf-mmax (1/36 - 1/49 < 0.01); 0 lets the weights f* alone bound it, which pays at
-    /// high resolution (caustic 288x288 at 64 spp with --dtf-mmax 16: perceptual error
+    /// (paper: 0.01). With 0.01 a flat region of equal weights stops between 6x6 and 7x7
+    /// whatever --dtf-mmax (1/36 - 1/49 < 0.01); 0 lets the weights f* alone bound it, which
+    /// pays at high resolution (caustic 288x288 at 64 spp with --dtf-mmax 16: perceptual error
     /// 0.70x -> 0.53x of BDPT, see the README) and costs RMSE at low resolution.
     #[arg(long = "dtf-df0", default_value_t = 0.01, allow_hyphen_values = true)]
     pub df0_min: f32,
