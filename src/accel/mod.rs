@@ -203,33 +203,61 @@ impl Tri {
         !(finite && self.e1.cross(self.e2).length_squared() > 0.0)
     }
 
-    /// Möller–Trumbore, double-sided (the scalar reference for [`Tri4`], used
-    /// by the tests' brute force). Returns `(t, b1, b2)` for a hit with
-    /// `0 < t < t_max`.
+    /// Möller–Trumbore, double-sided, with the division deferred to the hit (the
+    /// scalar reference for [`Tri4`], used by the tests' brute force). Returns
+    /// `(t, b1, b2)` for a hit with `0 < t < t_max`.
     #[cfg(test)]
     fn intersect(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<(f32, f32, f32)> {
         let p = d.cross(self.e2);
         let det = self.e1.dot(p);
-        if det == 0.0 {
-            return None;
-        }
-        let inv = 1.0 / det;
+        let (sign, abs_det) = (det.to_bits() & SIGN, det.abs());
+        let flip = |x: f32| f32::from_bits(x.to_bits() ^ sign);
         let s = o - self.v0;
-        let u = s.dot(p) * inv;
-        if !(0.0..=1.0).contains(&u) {
-            return None;
-        }
+        let u = flip(s.dot(p));
         let q = s.cross(self.e1);
-        let v = d.dot(q) * inv;
-        if !(v >= 0.0 && u + v <= 1.0) {
+        let v = flip(d.dot(q));
+        let t = flip(self.e2.dot(q));
+        if !(det != 0.0
+            && u >= 0.0
+            && v >= 0.0
+            && u + v <= abs_det
+            && t > 0.0
+            && t < abs_det * t_max)
+        {
             return None;
         }
-        let t = self.e2.dot(q) * inv;
+        let inv = 1.0 / abs_det;
+        let t = t * inv;
         if t > 0.0 && t < t_max {
-            Some((t, u, v))
+            Some((t, u * inv, v * inv))
         } else {
             None
         }
+    }
+}
+
+/// Sign bit of an f32.
+const SIGN: u32 = 1 << 31;
+
+/// `x` with each lane's sign flipped where `by`'s lane is negative (sign bit
+/// set): x * sign(by) without rounding.
+#[inline(always)]
+fn xor_sign(x: Vec4, by: Vec4) -> Vec4 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE is part of x86-64.
+        unsafe {
+            let m = _mm_and_ps(by.into(), _mm_set1_ps(f32::from_bits(SIGN)));
+            _mm_xor_ps(x.into(), m).into()
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let (a, b) = (x.to_array(), by.to_array());
+        Vec4::from_array(std::array::from_fn(|i| {
+            f32::from_bits(a[i].to_bits() ^ (b[i].to_bits() & SIGN))
+        }))
     }
 }
 
@@ -270,8 +298,16 @@ impl Tri4 {
     }
 
     /// Mask (bit = lane) of the lanes in `valid` hit with `0 < t < t_max`,
-    /// and their `t, b1, b2`. Operation for operation the same as
-    /// [`Tri::intersect`], so results agree bit for bit.
+    /// and their `t, b1, b2` (computed only when some lane is hit).
+    /// Operation for operation the same as [`Tri::intersect`], so results
+    /// agree bit for bit.
+    ///
+    /// The division is deferred (as in Embree): u, v and t are compared
+    /// unnormalised, their signs flipped by the determinant's, against |det|
+    /// and |det| t_max, which takes the division off the chain of dependent
+    /// operations a traversal step waits on; only a packet with a hit divides,
+    /// and then t is checked again against (0, t_max) so that rounding cannot
+    /// let a hit out of the interval.
     #[inline(always)]
     fn intersect(&self, r: &RayData, t_max: f32, valid: u32) -> (u32, Vec4, Vec4, Vec4) {
         let [e1x, e1y, e1z] = self.e1;
@@ -282,25 +318,32 @@ impl Tri4 {
         let py = dz * e2x - e2z * dx;
         let pz = dx * e2y - e2x * dy;
         let det = e1x * px + e1y * py + e1z * pz;
-        let inv = Vec4::ONE / det;
+        let flip = |x: Vec4| xor_sign(x, det);
+        let abs_det = det.abs();
         let sx = r.ox - self.v0[0];
         let sy = r.oy - self.v0[1];
         let sz = r.oz - self.v0[2];
-        let u = (sx * px + sy * py + sz * pz) * inv;
+        let u = flip(sx * px + sy * py + sz * pz);
         // q = s × e1
         let qx = sy * e1z - e1y * sz;
         let qy = sz * e1x - e1z * sx;
         let qz = sx * e1y - e1x * sy;
-        let v = (dx * qx + dy * qy + dz * qz) * inv;
-        let t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+        let v = flip(dx * qx + dy * qy + dz * qz);
+        let t = flip(e2x * qx + e2y * qy + e2z * qz);
         let ok = det.cmpne(Vec4::ZERO)
             & u.cmpge(Vec4::ZERO)
-            & u.cmple(Vec4::ONE)
             & v.cmpge(Vec4::ZERO)
-            & (u + v).cmple(Vec4::ONE)
+            & (u + v).cmple(abs_det)
             & t.cmpgt(Vec4::ZERO)
-            & t.cmplt(Vec4::splat(t_max));
-        (ok.bitmask() & valid, t, u, v)
+            & t.cmplt(abs_det * Vec4::splat(t_max));
+        let m = ok.bitmask() & valid;
+        if m == 0 {
+            return (0, Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
+        }
+        let inv = Vec4::ONE / abs_det;
+        let t = t * inv;
+        let ok = t.cmpgt(Vec4::ZERO) & t.cmplt(Vec4::splat(t_max));
+        (ok.bitmask() & m, t, u * inv, v * inv)
     }
 }
 

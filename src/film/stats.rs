@@ -15,9 +15,19 @@ const TERM_MAX: f64 = 1.9e28; // < 2^94 = 1.98e28
 
 #[inline]
 fn fixed(x: f64, scale: f64) -> i128 {
-    // `as` saturates and maps NaN to 0; samples are finite here.
-    (x * scale).clamp(-TERM_MAX, TERM_MAX) as i128
+    // `as` saturates and maps NaN to 0; samples are finite here. Terms that fit an i64
+    // (nearly all) take the one-instruction conversion; both truncate, so the value is
+    // the same.
+    let y = x * scale;
+    if y.abs() < I64_RANGE {
+        y as i64 as i128
+    } else {
+        y.clamp(-TERM_MAX, TERM_MAX) as i128
+    }
 }
+
+/// Magnitudes below this convert exactly through an i64 (2^63).
+const I64_RANGE: f64 = 9_223_372_036_854_775_808.0;
 
 /// Statistics of the samples of one pixel.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
