@@ -347,48 +347,6 @@ impl Tri4 {
     }
 }
 
-/// Up to four triangles as indices into the BVH's shared vertex array
-/// (`Bvh::verts`): the compact leaf form of large meshes. One cache line
-/// instead of the three of a [`Tri4`]; the vertices (each shared by about six
-/// triangles of a mesh) are read from a smaller array that stays in the
-/// caches. Decoded into a [`Tri4`] with the same v0, e1 = v1 - v0 and
-/// e2 = v2 - v0 bits (the same f32 subtractions), so hits do not change.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
-struct TriIdx4 {
-    /// `v[k][lane]`: vertex `k` of the lane's triangle (0 for unused lanes).
-    v: [[u32; 4]; 3],
-    /// As [`Tri4::ids`].
-    ids: [u32; 4],
-}
-const _: () = assert!(std::mem::size_of::<TriIdx4>() == 64);
-
-impl TriIdx4 {
-    /// The packet in SoA Möller–Trumbore form.
-    #[inline(always)]
-    fn decode(&self, verts: &[Vec4]) -> Tri4 {
-        // Columns (x, y, z, 0) of the four lanes' vertex k, transposed into rows.
-        let corner = |k: usize| {
-            let [a, b, c, d] = self.v[k].map(|i| verts[i as usize]);
-            let m = glam::Mat4::from_cols(a, b, c, d).transpose();
-            [m.x_axis, m.y_axis, m.z_axis]
-        };
-        let (v0, v1, v2) = (corner(0), corner(1), corner(2));
-        Tri4 {
-            v0,
-            e1: [v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]],
-            e2: [v2[0] - v0[0], v2[1] - v0[1], v2[2] - v0[2]],
-            ids: self.ids,
-        }
-    }
-}
-
-/// Meshes of at least this many triangles get indexed leaves ([`TriIdx4`]):
-/// from here on a tree of [`Tri4`] packets outgrows the caches (8 MiB at about
-/// 170k triangles, `BATCH_MIN_BYTES`), and traversal waits on memory more
-/// than on the decoding.
-pub const INDEXED_MIN_TRIS: usize = 1 << 17;
-
 /// Children per BVH node.
 const WIDTH: usize = 8;
 
@@ -441,13 +399,8 @@ pub struct Bvh {
     /// Traversal stack entries a query may need (computed at build time).
     stack_needed: usize,
     leaf_count: usize,
-    /// Triangle packets (one or two per leaf), in traversal order; empty
-    /// when the leaves are indexed.
+    /// Triangle packets (one or two per leaf), in traversal order.
     tris: Vec<Tri4>,
-    /// Indexed triangle packets (large meshes, [`INDEXED_MIN_TRIS`]) and the
-    /// deduplicated vertices they index (x, y, z, 0), in first-use order.
-    itris: Vec<TriIdx4>,
-    verts: Vec<Vec4>,
     /// Instruction set the queries run with.
     isa: Isa,
     /// [`Bvh::prefers_batches`] forced (tests, benchmarks); `None`: by size.
@@ -687,9 +640,6 @@ struct Query<const N: usize> {
     /// The node or leaf the next step visits.
     cur: u32,
     any: bool,
-    /// Interleaved traversal of indexed leaves: the vertices of leaf `cur` have
-    /// been prefetched (its test runs at the query's next step).
-    fetched: bool,
 }
 
 impl<const N: usize> Query<N> {
@@ -702,7 +652,6 @@ impl<const N: usize> Query<N> {
             stack: Stack::new(),
             cur: root,
             any,
-            fetched: false,
         }
     }
 }
@@ -718,12 +667,6 @@ impl Bvh {
     /// Builds the BVH with binned SAH (parallel with rayon on large inputs),
     /// then collapses it into an 8-wide BVH.
     pub fn build(tris: &[[Vec3; 3]]) -> Bvh {
-        Self::build_with(tris, tris.len() >= INDEXED_MIN_TRIS)
-    }
-
-    /// [`Bvh::build`] with the leaves indexed or not, whatever the size (tests
-    /// and benchmarks).
-    pub fn build_with(tris: &[[Vec3; 3]], indexed: bool) -> Bvh {
         let (mut refs, mut ids): (Vec<build::PrimRef>, Vec<u32>) = tris
             .par_iter()
             .with_min_len(4096)
@@ -748,8 +691,6 @@ impl Bvh {
                 stack_needed: 0,
                 leaf_count: 0,
                 tris: Vec::new(),
-                itris: Vec::new(),
-                verts: Vec::new(),
                 isa: Isa::chosen(),
                 batching: None,
             };
@@ -768,31 +709,17 @@ impl Bvh {
             ids: &ids,
             input: tris,
             nodes: Vec::with_capacity(nodes2.len() / 4 + 1),
-            packets: Vec::with_capacity(if indexed { 0 } else { nodes2.len() / 2 + 1 }),
-            ipackets: Vec::with_capacity(if indexed { nodes2.len() / 2 + 1 } else { 0 }),
-            vert_of: if indexed {
-                std::collections::HashMap::with_capacity_and_hasher(
-                    ids.len() / 2 + 16,
-                    Default::default(),
-                )
-            } else {
-                Default::default()
-            },
-            verts: Vec::new(),
-            indexed,
+            packets: Vec::with_capacity(nodes2.len() / 2 + 1),
             leaves: 0,
         };
         // Before the arrays are written, so the kernel can back them with huge
         // pages as they are first touched.
         advise_huge_pages(&c.nodes);
         advise_huge_pages(&c.packets);
-        advise_huge_pages(&c.ipackets);
         let (root, stack_needed) = c.slot(0);
         let Collapse {
             mut nodes,
             mut packets,
-            mut ipackets,
-            mut verts,
             leaves,
             ..
         } = c;
@@ -802,8 +729,6 @@ impl Bvh {
         assert!(stack_needed <= LARGE_STACK);
         nodes.shrink_to_fit();
         packets.shrink_to_fit();
-        ipackets.shrink_to_fit();
-        verts.shrink_to_fit();
         Bvh {
             nodes,
             root,
@@ -811,8 +736,6 @@ impl Bvh {
             stack_needed,
             leaf_count: leaves,
             tris: packets,
-            itris: ipackets,
-            verts,
             isa: Isa::chosen(),
             batching: None,
         }
@@ -849,7 +772,7 @@ impl Bvh {
     /// Closest hit with `t` in `(0, t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        if self.is_empty() {
+        if self.tris.is_empty() {
             return None;
         }
         match self.isa {
@@ -863,7 +786,7 @@ impl Bvh {
     /// Whether anything is hit with `t` in `(0, t_max)` (stops at the first hit).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        if self.is_empty() {
+        if self.tris.is_empty() {
             return false;
         }
         match self.isa {
@@ -945,7 +868,7 @@ impl Bvh {
         }
         Some(Hit {
             t: q.t_best,
-            prim: self.packet_ids(q.best.0 as usize / 4)[q.best.0 as usize % 4],
+            prim: self.tris[q.best.0 as usize / 4].ids[q.best.0 as usize % 4],
             b1: q.best.1,
             b2: q.best.2,
         })
@@ -1009,29 +932,10 @@ impl Bvh {
             }
         } else {
             let (p, count) = leaf_packets(cur);
-            if IL && !self.itris.is_empty() && !q.fetched {
-                // The packet (prefetched when the leaf was chosen) names the
-                // vertices: start loading them, and test at the next step.
-                for k in 0..count.div_ceil(4) as usize {
-                    let pk = &self.itris[p + k];
-                    for v in pk.v.iter().flatten() {
-                        prefetch_line(self.verts.as_ptr().wrapping_add(*v as usize));
-                    }
-                }
-                q.fetched = true;
-                return false;
-            }
-            q.fetched = false;
             let mut k = 0;
             loop {
                 let valid = lane_mask(count - 4 * k as u32);
-                let (mut m, t, u, v) = if self.itris.is_empty() {
-                    self.tris[p + k].intersect(&q.r, q.t_best, valid)
-                } else {
-                    self.itris[p + k]
-                        .decode(&self.verts)
-                        .intersect(&q.r, q.t_best, valid)
-                };
+                let (mut m, t, u, v) = self.tris[p + k].intersect(&q.r, q.t_best, valid);
                 if m != 0 {
                     if q.any {
                         q.best.0 = 0;
@@ -1079,7 +983,7 @@ impl Bvh {
     /// [`Bvh::intersect`] and [`Bvh::occluded`], bit for bit.
     pub fn trace(&self, queries: &[RayQuery], answers: &mut [RayAnswer]) {
         assert_eq!(queries.len(), answers.len(), "one answer per query");
-        if self.is_empty() {
+        if self.tris.is_empty() {
             for (q, a) in queries.iter().zip(answers.iter_mut()) {
                 *a = match q {
                     RayQuery::Closest(..) => RayAnswer::Closest(None),
@@ -1175,20 +1079,12 @@ impl Bvh {
             let (p, lines) = if r & LEAF == 0 {
                 (self.nodes.as_ptr().wrapping_add(r as usize) as *const i8, 4)
             } else {
-                // 160 bytes aligned to 32 span three lines, 320 six; an
-                // indexed packet is one line.
+                // 160 bytes aligned to 32 span three lines, 320 six.
                 let (first, count) = leaf_packets(r);
-                if self.itris.is_empty() {
-                    (
-                        self.tris.as_ptr().wrapping_add(first) as *const i8,
-                        if count > 4 { 6 } else { 3 },
-                    )
-                } else {
-                    (
-                        self.itris.as_ptr().wrapping_add(first) as *const i8,
-                        if count > 4 { 2 } else { 1 },
-                    )
-                }
+                (
+                    self.tris.as_ptr().wrapping_add(first) as *const i8,
+                    if count > 4 { 6 } else { 3 },
+                )
             };
             for l in 0..lines {
                 prefetch_line(p.wrapping_add(64 * l));
@@ -1206,11 +1102,7 @@ impl Bvh {
     /// Shape of the tree: (8-wide nodes, leaves, triangle packets). The
     /// nodes hold `nodes - 1 + leaves` children.
     pub fn shape(&self) -> (usize, usize, usize) {
-        (
-            self.nodes.len(),
-            self.leaf_count,
-            self.tris.len() + self.itris.len(),
-        )
+        (self.nodes.len(), self.leaf_count, self.tris.len())
     }
 
     /// Number of nodes: 8-wide interior nodes plus leaves (leaves are stored
@@ -1225,39 +1117,6 @@ impl Bvh {
         std::mem::size_of::<Self>()
             + self.nodes.capacity() * std::mem::size_of::<Node8>()
             + self.tris.capacity() * std::mem::size_of::<Tri4>()
-            + self.itris.capacity() * std::mem::size_of::<TriIdx4>()
-            + self.verts.capacity() * std::mem::size_of::<Vec4>()
-    }
-
-    /// Whether the BVH holds no triangle.
-    #[inline(always)]
-    fn is_empty(&self) -> bool {
-        self.leaf_count == 0
-    }
-
-    /// Whether the leaves are indexed ([`INDEXED_MIN_TRIS`]).
-    pub fn indexed(&self) -> bool {
-        !self.itris.is_empty()
-    }
-
-    /// The input triangle indices of packet `p`'s lanes.
-    #[inline(always)]
-    fn packet_ids(&self, p: usize) -> &[u32; 4] {
-        if self.itris.is_empty() {
-            &self.tris[p].ids
-        } else {
-            &self.itris[p].ids
-        }
-    }
-
-    /// Packet `p` in SoA form, whichever way it is stored.
-    #[cfg(test)]
-    fn packet(&self, p: usize) -> Tri4 {
-        if self.itris.is_empty() {
-            self.tris[p]
-        } else {
-            self.itris[p].decode(&self.verts)
-        }
     }
 }
 
@@ -1398,55 +1257,10 @@ struct Collapse<'a> {
     input: &'a [[Vec3; 3]],
     nodes: Vec<Node8>,
     packets: Vec<Tri4>,
-    /// Indexed leaves: the packets, each vertex's index by its bits, and the
-    /// vertices in first-use order (so a leaf's vertices lie near its
-    /// neighbours').
-    ipackets: Vec<TriIdx4>,
-    vert_of: std::collections::HashMap<[u32; 3], u32, VertexHash>,
-    verts: Vec<Vec4>,
-    indexed: bool,
     leaves: usize,
 }
 
-/// Hasher of a vertex's three f32 bit patterns (the std hasher's DoS
-/// resistance is not needed, and a multiply-xorshift is a few times faster).
-#[derive(Default, Clone, Copy)]
-struct VertexHasher(u64);
-
-impl std::hash::Hasher for VertexHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for c in bytes.chunks(4) {
-            let mut w = [0u8; 4];
-            w[..c.len()].copy_from_slice(c);
-            self.write_u32(u32::from_le_bytes(w));
-        }
-    }
-    #[inline]
-    fn write_u32(&mut self, x: u32) {
-        self.0 = (self.0.rotate_left(21) ^ x as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    }
-    #[inline]
-    fn finish(&self) -> u64 {
-        self.0 ^ (self.0 >> 29)
-    }
-}
-
-type VertexHash = std::hash::BuildHasherDefault<VertexHasher>;
-
 impl Collapse<'_> {
-    /// The index of vertex `v` in `verts`, added at its first use.
-    fn vertex(&mut self, v: Vec3) -> u32 {
-        let next = self.verts.len() as u32;
-        let i = *self
-            .vert_of
-            .entry([v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
-            .or_insert(next);
-        if i == next {
-            self.verts.push(v.extend(0.0));
-        }
-        i
-    }
-
     /// Appends to `out` the BVH2 nodes that, as at most `j` child slots, cover
     /// the subtree at `i` at least cost.
     fn distribute(&self, i: usize, j: usize, out: &mut Vec<usize>) {
@@ -1477,24 +1291,6 @@ impl Collapse<'_> {
             }
             let first = n2[first].a as usize;
             let ids = &self.ids[first..first + p.tris as usize];
-            if self.indexed {
-                let r = leaf_ref(self.ipackets.len() as u32, p.tris);
-                for chunk in ids.chunks(4) {
-                    let mut pk = TriIdx4 {
-                        v: [[0; 4]; 3],
-                        ids: [u32::MAX; 4],
-                    };
-                    for (lane, &i) in chunk.iter().enumerate() {
-                        pk.ids[lane] = i;
-                        for (k, v) in self.input[i as usize].iter().enumerate() {
-                            pk.v[k][lane] = self.vertex(*v);
-                        }
-                    }
-                    self.ipackets.push(pk);
-                }
-                self.leaves += 1;
-                return (r, 0);
-            }
             let r = leaf_ref(self.packets.len() as u32, p.tris);
             for chunk in ids.chunks(4) {
                 let mut tris = [Tri::new(&[Vec3::ZERO; 3]); 4];

@@ -93,17 +93,13 @@ fn random_ray(rng: &mut Rng) -> (Ray, f32) {
 
 /// Checks every instruction set this CPU has against the brute force; returns
 /// the hits and ties of the last.
-/// Both leaf forms (packets of triangles and indexed packets) are checked.
 fn check_against_brute(tris: &[[Vec3; 3]], rays: usize, seed: u64) -> (usize, usize) {
+    let mut bvh = Bvh::build(tris);
+    check_structure(&bvh, tris);
     let mut out = (0, 0);
-    for indexed in [false, true] {
-        let mut bvh = Bvh::build_with(tris, indexed);
-        assert_eq!(bvh.indexed(), indexed && bvh.leaf_count > 0);
-        check_structure(&bvh, tris);
-        for isa in Isa::available() {
-            assert!(bvh.set_isa(isa));
-            out = check_isa_against_brute(&bvh, tris, rays, seed);
-        }
+    for isa in Isa::available() {
+        assert!(bvh.set_isa(isa));
+        out = check_isa_against_brute(&bvh, tris, rays, seed);
     }
     out
 }
@@ -157,7 +153,7 @@ fn check_structure(bvh: &Bvh, input: &[[Vec3; 3]]) {
         .filter(|&i| !is_degenerate(&input[i as usize]))
         .collect();
     if expected.is_empty() {
-        assert!(bvh.nodes.is_empty() && bvh.tris.is_empty() && bvh.itris.is_empty());
+        assert!(bvh.nodes.is_empty() && bvh.tris.is_empty());
         return;
     }
     assert!(bvh.stack_needed <= LARGE_STACK);
@@ -177,9 +173,9 @@ fn check_structure(bvh: &Bvh, input: &[[Vec3; 3]]) {
             for k in 0..count.div_ceil(4) as usize {
                 let p = first + k;
                 let valid = lane_mask(count - 4 * k as u32);
-                let t = &bvh.packet(p);
+                let t = &bvh.tris[p];
                 for lane in 0..4 {
-                    let id = t.ids[lane];
+                    let id = bvh.tris[p].ids[lane];
                     if valid & (1 << lane) == 0 {
                         assert_eq!(id, u32::MAX);
                         continue;
@@ -283,9 +279,9 @@ fn instruction_sets_agree_bit_for_bit() {
         is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
     );
     let mut rng = Rng::new(11);
-    for (n, indexed) in [(300, false), (40_000, false), (40_000, true)] {
+    for n in [300, 40_000] {
         let tris = soup(&mut rng, n, true);
-        let mut bvh = Bvh::build_with(&tris, indexed);
+        let mut bvh = Bvh::build(&tris);
         let rays: Vec<(Ray, f32)> = (0..20_000).map(|_| random_ray(&mut rng)).collect();
         let run = |bvh: &Bvh| {
             rays.iter()
@@ -444,9 +440,9 @@ fn interleaved_queries_answer_as_single_ones_bit_for_bit() {
     // `Bvh::trace` against `intersect` / `occluded`, on every instruction set, with
     // closest-hit and any-hit queries mixed in one batch and batches of every length.
     let mut rng = Rng::new(23);
-    for (n, indexed) in [(1, false), (300, false), (40_000, false), (40_000, true)] {
+    for n in [1, 300, 40_000] {
         let tris = soup(&mut rng, n, true);
-        let mut bvh = Bvh::build_with(&tris, indexed);
+        let mut bvh = Bvh::build(&tris);
         let rays: Vec<(Ray, f32)> = (0..5_000).map(|_| random_ray(&mut rng)).collect();
         let queries: Vec<RayQuery> = rays
             .iter()
@@ -495,38 +491,5 @@ fn interleaved_queries_answer_as_single_ones_bit_for_bit() {
                 isa.name()
             );
         }
-    }
-}
-
-/// Indexed leaves (one cache line per packet, vertices shared) hold the same
-/// triangles in the same tree as packets of triangles: every answer is the same,
-/// bit for bit, ties included. Vertices shared by many triangles (a grid) are
-/// stored once.
-#[test]
-fn indexed_leaves_answer_as_packets_bit_for_bit() {
-    let mut rng = Rng::new(31);
-    // A 60x60 grid of quads (shared vertices) plus a soup (no sharing, degenerates).
-    let mut tris = Vec::new();
-    let g =
-        |i: usize, j: usize| Vec3::new(i as f32 / 60.0, (i * j % 7) as f32 * 0.01, j as f32 / 60.0);
-    for i in 0..60 {
-        for j in 0..60 {
-            tris.push([g(i, j), g(i + 1, j), g(i + 1, j + 1)]);
-            tris.push([g(i, j), g(i + 1, j + 1), g(i, j + 1)]);
-        }
-    }
-    tris.extend(soup(&mut rng, 3000, true));
-    let plain = Bvh::build_with(&tris, false);
-    let indexed = Bvh::build_with(&tris, true);
-    assert!(indexed.indexed() && !plain.indexed());
-    assert_eq!(plain.shape(), indexed.shape());
-    assert!(indexed.verts.len() < 61 * 61 + 3 * 3000 + 1);
-    assert!(indexed.memory_bytes() < plain.memory_bytes());
-    for _ in 0..20_000 {
-        let (r, t) = random_ray(&mut rng);
-        let key =
-            |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.b1.to_bits(), h.b2.to_bits()));
-        assert_eq!(key(plain.intersect(&r, t)), key(indexed.intersect(&r, t)));
-        assert_eq!(plain.occluded(&r, t), indexed.occluded(&r, t));
     }
 }
