@@ -620,6 +620,34 @@ pub enum RayAnswer {
     Occluded(bool),
 }
 
+/// Queries waiting for a slot of [`Bvh::trace_stream`], with the caller's tags.
+#[derive(Default)]
+pub struct QueryQueue(std::collections::VecDeque<(u32, RayQuery)>);
+
+impl QueryQueue {
+    /// Queues query `q`; its answer will come back with `tag`.
+    #[inline]
+    pub fn push(&mut self, tag: u32, q: RayQuery) {
+        self.0.push_back((tag, q));
+    }
+
+    /// Whether no query is waiting.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+/// The work [`Bvh::trace_stream`] answers: queries come from `refill` (new work,
+/// asked for whenever a slot is free and the queue empty) and from `answered`
+/// (follow-ups of an answer).
+pub trait QueryStream {
+    /// Queue new work's queries; false if there is none now.
+    fn refill(&mut self, queue: &mut QueryQueue) -> bool;
+    /// The answer to the query queued with `tag`.
+    fn answered(&mut self, tag: u32, answer: RayAnswer, queue: &mut QueryQueue);
+}
+
 /// Queries [`Bvh::trace`] keeps in flight at once.
 pub const BATCH: usize = 32;
 
@@ -1058,6 +1086,112 @@ impl Bvh {
             } else {
                 RayAnswer::Closest(self.closest_of(q))
             };
+        }
+    }
+
+    /// Answers a stream of queries, keeping up to [`BATCH`] of them in flight:
+    /// their traversal steps interleaved as in [`Bvh::trace`], and a slot freed by
+    /// an answered query filled at once from `src` (its follow-up queries, or new
+    /// work), so that the traversals never wait for the slowest one of a batch.
+    /// Each answer is that of [`Bvh::intersect`] or [`Bvh::occluded`], bit for bit.
+    pub fn trace_stream<S: QueryStream>(&self, src: &mut S) {
+        let mut queue = QueryQueue::default();
+        if self.tris.is_empty() {
+            // Nothing to hit: answer everything at once.
+            while src.refill(&mut queue) || !queue.0.is_empty() {
+                while let Some((tag, q)) = queue.0.pop_front() {
+                    let a = match q {
+                        RayQuery::Closest(..) => RayAnswer::Closest(None),
+                        RayQuery::Occluded(..) => RayAnswer::Occluded(false),
+                    };
+                    src.answered(tag, a, &mut queue);
+                }
+            }
+            return;
+        }
+        match self.isa {
+            // SAFETY: as in `intersect`.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { self.stream_avx2(src, &mut queue) },
+            _ => self.stream_base(src, &mut queue),
+        }
+    }
+
+    #[inline(never)]
+    fn stream_base<S: QueryStream>(&self, src: &mut S, queue: &mut QueryQueue) {
+        self.stream_sized::<false, S>(src, queue)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn stream_avx2<S: QueryStream>(&self, src: &mut S, queue: &mut QueryQueue) {
+        self.stream_sized::<true, S>(src, queue)
+    }
+
+    #[inline(always)]
+    fn stream_sized<const AVX: bool, S: QueryStream>(&self, src: &mut S, queue: &mut QueryQueue) {
+        if self.stack_needed <= TINY_STACK {
+            self.stream_impl::<TINY_STACK, AVX, S>(src, queue)
+        } else if self.stack_needed <= SMALL_STACK {
+            self.stream_impl::<SMALL_STACK, AVX, S>(src, queue)
+        } else {
+            self.stream_impl::<LARGE_STACK, AVX, S>(src, queue)
+        }
+    }
+
+    #[inline(always)]
+    fn stream_impl<const N: usize, const AVX: bool, S: QueryStream>(
+        &self,
+        src: &mut S,
+        queue: &mut QueryQueue,
+    ) {
+        let mut st: [std::mem::MaybeUninit<Query<N>>; BATCH] =
+            [const { std::mem::MaybeUninit::uninit() }; BATCH];
+        let mut tags = [0u32; BATCH];
+        let mut live = [false; BATCH];
+        let mut n_live = 0;
+        self.prefetch(self.root);
+        loop {
+            // Fill the free slots: queued queries first, then new work.
+            for i in 0..BATCH {
+                if live[i] {
+                    continue;
+                }
+                if queue.0.is_empty() && !src.refill(queue) {
+                    break;
+                }
+                let Some((tag, q)) = queue.0.pop_front() else {
+                    break;
+                };
+                let (ray, t_max, any) = match q {
+                    RayQuery::Closest(r, t) => (r, t, false),
+                    RayQuery::Occluded(r, t) => (r, t, true),
+                };
+                st[i].write(Query::new(&ray, t_max, any, self.root));
+                tags[i] = tag;
+                live[i] = true;
+                n_live += 1;
+            }
+            if n_live == 0 {
+                return;
+            }
+            for i in 0..BATCH {
+                if !live[i] {
+                    continue;
+                }
+                // SAFETY: a live slot was written when it was filled.
+                let q = unsafe { st[i].assume_init_mut() };
+                if self.step::<N, AVX, true>(q) {
+                    live[i] = false;
+                    n_live -= 1;
+                    let a = if q.any {
+                        RayAnswer::Occluded(q.best.0 != u32::MAX)
+                    } else {
+                        RayAnswer::Closest(self.closest_of(q))
+                    };
+                    src.answered(tags[i], a, queue);
+                }
+            }
         }
     }
 
