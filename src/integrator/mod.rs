@@ -14,7 +14,7 @@ pub mod path;
 pub mod rr;
 pub mod visible;
 
-use crate::math::{Ray, Vec2};
+use crate::math::{Ray, Vec2, Vec3};
 use crate::sampling::SampleStream;
 use crate::scene::{Camera, Scene};
 
@@ -368,7 +368,7 @@ impl Integrator {
             && scene.bvh.prefers_batches()
     }
 
-    /// [`Integrator::sample`] of any number of samples at once (for an
+    /// [`Integrator::sample`] of up to [`path::BATCH_PATHS`] samples at once (for an
     /// estimator that [`Integrator::batches`]): sample `i` is of pixel `pixels[i]` with
     /// stream `streams[i]`; the same values as one at a time, into `out`.
     pub fn sample_batch<const N: usize>(
@@ -382,15 +382,14 @@ impl Integrator {
     ) {
         debug_assert!(matches!(self.set.kind, IntegratorKind::Path));
         let n = pixels.len();
-        let rays: Vec<Ray> = pixels
-            .iter()
-            .zip(streams.iter_mut())
-            .map(|(&(x, y), s)| camera_ray(cam, x, y, s))
-            .collect();
-        let mut l = vec![crate::spectrum::Spectrum::<N>::ZERO; n];
+        let mut rays = [Ray::new(Vec3::ZERO, Vec3::ZERO); path::BATCH_PATHS];
+        for ((r, &(x, y)), s) in rays.iter_mut().zip(pixels).zip(streams.iter_mut()) {
+            *r = camera_ray(cam, x, y, s);
+        }
+        let mut l = [crate::spectrum::Spectrum::<N>::ZERO; path::BATCH_PATHS];
         let lt = self.l_tilde::<N>();
-        path::radiance_batch::<N>(scene, &rays, streams, &self.set, &lt, c, &mut l);
-        for (o, v) in out.iter_mut().zip(&l) {
+        path::radiance_batch::<N>(scene, &rays[..n], streams, &self.set, &lt, c, &mut l[..n]);
+        for (o, v) in out.iter_mut().zip(&l[..n]) {
             *o = v.to_rgb();
         }
     }

@@ -16,7 +16,7 @@
 
 use super::rr::{LTilde, Step};
 use super::{Counters, IntegratorSettings};
-use crate::math::{offset_origin, Frame, Ray};
+use crate::math::{offset_origin, Frame, Ray, Vec3};
 use crate::sampling::{power_heuristic, SampleStream};
 use crate::scene::{Scene, SurfaceHit};
 use crate::spectrum::Spectrum;
@@ -51,12 +51,10 @@ pub fn radiance<const N: usize>(
 /// step: its shadow ray and its next segment).
 pub const BATCH_PATHS: usize = crate::accel::BATCH / 2;
 
-/// [`radiance`] of any number of camera rays, each with its own sample stream, into
-/// `out`: the same paths, operation for operation, but their ray queries are answered by
-/// `Bvh::trace_stream`, which overlaps their memory loads (on scenes larger than the
-/// caches). Up to [`BATCH_PATHS`] paths are under way at once; a path's next queries go
-/// in as soon as its last answers are back, and a new path starts when one ends, so the
-/// traversals never wait for the slowest of a batch.
+/// [`radiance`] of up to [`BATCH_PATHS`] camera rays at once, each with its own sample
+/// stream, into `out`: the same paths, operation for operation, but each step's ray
+/// queries of all paths are answered together by `Bvh::trace`, which overlaps their
+/// memory loads (on scenes larger than the caches).
 pub fn radiance_batch<const N: usize>(
     scene: &Scene,
     rays: &[Ray],
@@ -66,158 +64,60 @@ pub fn radiance_batch<const N: usize>(
     c: &mut Counters,
     out: &mut [Spectrum<N>],
 ) {
+    use crate::accel::{RayAnswer, RayQuery};
     let n = rays.len();
-    assert!(streams.len() == n && out.len() == n);
-    let mut d = Driver {
-        scene,
-        rays,
-        streams,
-        set,
-        l_tilde,
-        c,
-        out,
-        next: 0,
-        slots: Vec::with_capacity(BATCH_PATHS),
-        free: Vec::with_capacity(BATCH_PATHS),
-        ready: std::collections::VecDeque::with_capacity(BATCH_PATHS),
-    };
-    scene.bvh.trace_stream(&mut d);
-    debug_assert!(d.next == n && d.free.len() == d.slots.len());
-}
-
-/// A path under way in [`radiance_batch`]: its state, which sample it is, and the
-/// answers it waits for.
-struct Slot<const N: usize> {
-    p: PathState<N>,
-    job: usize,
-    /// Queries not answered yet.
-    waiting: u8,
-    occluded: bool,
-    hit: Option<crate::accel::Hit>,
-}
-
-/// [`radiance_batch`]'s side of `Bvh::trace_stream`.
-struct Driver<'a, const N: usize> {
-    scene: &'a Scene,
-    rays: &'a [Ray],
-    streams: &'a mut [SampleStream],
-    set: &'a IntegratorSettings,
-    l_tilde: &'a LTilde<'a, N>,
-    c: &'a mut Counters,
-    out: &'a mut [Spectrum<N>],
-    /// The next camera ray to start.
-    next: usize,
-    slots: Vec<Slot<N>>,
-    /// Slots whose path has ended.
-    free: Vec<u32>,
-    /// Paths with all their answers, waiting to be shaded: a hit's triangle data is
-    /// prefetched when its answer comes and read `READY_LAG` answers later.
-    ready: std::collections::VecDeque<u32>,
-}
-
-/// Answered paths [`radiance_batch`] lets wait before shading them (see `Driver::ready`).
-const READY_LAG: usize = 4;
-
-impl<const N: usize> Driver<'_, N> {
-    /// Queues slot `i`'s queries (the shadow ray, then the next segment); a path with
-    /// none has ended: its value goes out and the slot is freed.
-    fn issue(&mut self, i: u32, queue: &mut crate::accel::QueryQueue) {
-        use crate::accel::RayQuery;
-        let sl = &mut self.slots[i as usize];
-        sl.waiting = 0;
-        if let Some((r, t_max, _)) = sl.p.shadow {
-            queue.push(i, RayQuery::Occluded(r, t_max));
-            sl.waiting += 1;
-        }
-        if let Some(r) = sl.p.ray {
-            self.c.rays += 1;
-            queue.push(i, RayQuery::Closest(r, f32::INFINITY));
-            sl.waiting += 1;
-        }
-        if sl.waiting == 0 {
-            // A last estimate term (the path ended with no shadow ray) is still to add.
-            sl.p.resolve(false);
-            self.out[sl.job] = sl.p.l;
-            self.free.push(i);
-        }
+    assert!(n <= BATCH_PATHS && streams.len() == n && out.len() == n);
+    let mut st = [PathState::<N>::DONE; BATCH_PATHS];
+    for (p, &r) in st.iter_mut().zip(rays) {
+        *p = PathState::new(r, c);
     }
-}
-
-impl<const N: usize> crate::accel::QueryStream for Driver<'_, N> {
-    fn refill(&mut self, queue: &mut crate::accel::QueryQueue) -> bool {
-        // Paths waiting to be shaded go first (their next queries), then a new path.
-        while let Some(t) = self.ready.pop_front() {
-            self.shade(t, queue);
-            if !queue.is_empty() {
-                return true;
+    let mut qs = [RayQuery::Occluded(Ray::new(Vec3::ZERO, Vec3::ZERO), 0.0); 2 * BATCH_PATHS];
+    let mut ans = [RayAnswer::Occluded(false); 2 * BATCH_PATHS];
+    loop {
+        let mut k = 0;
+        for p in &st[..n] {
+            if let Some((r, t_max, _)) = p.shadow {
+                qs[k] = RayQuery::Occluded(r, t_max);
+                k += 1;
+            }
+            if let Some(r) = p.ray {
+                c.rays += 1;
+                qs[k] = RayQuery::Closest(r, f32::INFINITY);
+                k += 1;
             }
         }
-        if self.next == self.rays.len() {
-            return false;
+        if k == 0 {
+            break;
         }
-        let i = match self.free.pop() {
-            Some(i) => i,
-            None if self.slots.len() < BATCH_PATHS => {
-                self.slots.push(Slot {
-                    p: PathState::DONE,
-                    job: 0,
-                    waiting: 0,
-                    occluded: false,
-                    hit: None,
-                });
-                (self.slots.len() - 1) as u32
+        scene.bvh.trace(&qs[..k], &mut ans[..k]);
+        for a in &ans[..k] {
+            if let RayAnswer::Closest(Some(h)) = a {
+                scene.prefetch_hit(h.prim);
             }
-            None => return false,
-        };
-        let job = self.next;
-        self.next += 1;
-        let sl = &mut self.slots[i as usize];
-        sl.p = PathState::new(self.rays[job], self.c);
-        sl.job = job;
-        self.issue(i, queue);
-        true
-    }
-
-    fn answered(
-        &mut self,
-        tag: u32,
-        answer: crate::accel::RayAnswer,
-        queue: &mut crate::accel::QueryQueue,
-    ) {
-        use crate::accel::RayAnswer;
-        let sl = &mut self.slots[tag as usize];
-        match answer {
-            RayAnswer::Occluded(o) => sl.occluded = o,
-            RayAnswer::Closest(h) => sl.hit = h,
         }
-        sl.waiting -= 1;
-        if sl.waiting > 0 {
-            return;
-        }
-        if let Some(h) = sl.hit {
-            self.scene.prefetch_hit(h.prim);
-        }
-        self.ready.push_back(tag);
-        if self.ready.len() > READY_LAG {
-            let t = self.ready.pop_front().expect("not empty");
-            self.shade(t, queue);
+        let mut a = ans[..k].iter();
+        for (p, s) in st[..n].iter_mut().zip(streams.iter_mut()) {
+            if p.shadow.is_some() {
+                let Some(RayAnswer::Occluded(o)) = a.next() else {
+                    unreachable!("answers follow the queries")
+                };
+                p.resolve(*o);
+            } else {
+                p.resolve(false);
+            }
+            if let Some(ray) = p.ray {
+                let Some(RayAnswer::Closest(h)) = a.next() else {
+                    unreachable!("answers follow the queries")
+                };
+                let hit = h.map(|h| scene.surface_hit(h));
+                p.advance(scene, &ray, hit, s, set, l_tilde, c);
+            }
         }
     }
-}
-
-impl<const N: usize> Driver<'_, N> {
-    /// Slot `tag`'s path with all its answers: as `radiance`, the shadow ray's estimate,
-    /// then the next vertex; then its next queries.
-    fn shade(&mut self, tag: u32, queue: &mut crate::accel::QueryQueue) {
-        let sl = &mut self.slots[tag as usize];
-        let occluded = std::mem::take(&mut sl.occluded);
-        sl.p.resolve(sl.p.shadow.is_some() && occluded);
-        if let Some(ray) = sl.p.ray {
-            let hit = sl.hit.take().map(|h| self.scene.surface_hit(h));
-            let s = &mut self.streams[sl.job];
-            sl.p.advance(self.scene, &ray, hit, s, self.set, self.l_tilde, self.c);
-        }
-        self.issue(tag, queue);
+    for (o, p) in out.iter_mut().zip(st[..n].iter_mut()) {
+        // A last estimate term (the path ended with no shadow ray) is still to add.
+        p.resolve(false);
+        *o = p.l;
     }
 }
 

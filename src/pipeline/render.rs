@@ -5,6 +5,7 @@
 //! added to the film after the pass, in row order.
 
 use crate::film::{Film, PixelStats, Rejections};
+use crate::integrator::path::BATCH_PATHS;
 use crate::integrator::{Counters, Integrator, IntegratorSettings, Splat, SplatSink};
 use crate::progress::Progress;
 use crate::sampling::{SampleStream, SamplerConfig};
@@ -167,25 +168,36 @@ fn pass<const N: usize>(
         let c = &mut out.counters;
         let mut done = 0u64;
         if batched && vis_row.is_none() && row_rays.is_none() && !split_rest {
-            // The row's samples, their paths traced together (`path::radiance_batch`:
-            // the same values, pushed in the same order, as one at a time).
+            // The row's samples in order, a batch of paths at a time (the same values,
+            // pushed in the same order, as one at a time).
             let jobs: Vec<(u32, u32)> = (0..w)
                 .flat_map(|x| (0..p.counts.get(y * w + x)).map(move |k| (x as u32, k)))
                 .collect();
-            let pixels: Vec<(u32, u32)> = jobs.iter().map(|&(x, _)| (x, y as u32)).collect();
-            let mut streams: Vec<SampleStream> = jobs
-                .iter()
-                .map(|&(x, k)| {
+            let mut pixels = [(0u32, y as u32); BATCH_PATHS];
+            let mut vals = [[0.0f32; 3]; BATCH_PATHS];
+            let mut streams = Vec::with_capacity(BATCH_PATHS);
+            for chunk in jobs.chunks(BATCH_PATHS) {
+                streams.clear();
+                streams.extend(chunk.iter().map(|&(x, k)| {
                     let pixel = (y * w + x as usize) as u32;
                     SampleStream::new(&set.sampler, p.stream, pixel, p.first_index + k)
-                })
-                .collect();
-            let mut vals = vec![[0.0f32; 3]; jobs.len()];
-            p.integrator
-                .sample_batch::<N>(p.scene, &cam, &pixels, &mut streams, c, &mut vals);
-            for (&(x, _), v) in jobs.iter().zip(&vals) {
-                if out.rejected.check(v) {
-                    row[x as usize].push(*v);
+                }));
+                for (px, &(x, _)) in pixels.iter_mut().zip(chunk) {
+                    px.0 = x;
+                }
+                let n = chunk.len();
+                p.integrator.sample_batch::<N>(
+                    p.scene,
+                    &cam,
+                    &pixels[..n],
+                    &mut streams,
+                    c,
+                    &mut vals[..n],
+                );
+                for (&(x, _), v) in chunk.iter().zip(&vals[..n]) {
+                    if out.rejected.check(v) {
+                        row[x as usize].push(*v);
+                    }
                 }
             }
             p.progress.advance(jobs.len() as u64);
