@@ -153,3 +153,31 @@ impl Rejections {
         false
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The i64 shortcut gives the terms of the i128 conversion it replaced, on both sides
+    /// of 2^63, at the cap, for negative values and for NaN.
+    #[test]
+    fn fixed_terms_are_those_of_the_i128_conversion() {
+        let old = |x: f64, s: f64| (x * s).clamp(-TERM_MAX, TERM_MAX) as i128;
+        let mut xs = vec![0.0, -0.0, 1e-13, 0.5, 1.0, 3.7, 11.3, 11.4, 2e6, 8.4e6, 8.5e6, 1e30];
+        // Around the i64 boundary for both scales.
+        for s in [FIXED, FIXED_SQ] {
+            let b = I64_RANGE / s;
+            for k in -3..=3 {
+                xs.push(b * (1.0 + k as f64 * f64::EPSILON));
+            }
+        }
+        xs.push(f64::NAN);
+        for &x in &xs {
+            for x in [x, -x] {
+                for s in [FIXED, FIXED_SQ] {
+                    assert_eq!(fixed(x, s), old(x, s), "x = {x:e}, scale {s:e}");
+                }
+            }
+        }
+    }
+}
