@@ -163,7 +163,9 @@ mod tests {
     #[test]
     fn fixed_terms_are_those_of_the_i128_conversion() {
         let old = |x: f64, s: f64| (x * s).clamp(-TERM_MAX, TERM_MAX) as i128;
-        let mut xs = vec![0.0, -0.0, 1e-13, 0.5, 1.0, 3.7, 11.3, 11.4, 2e6, 8.4e6, 8.5e6, 1e30];
+        let mut xs = vec![
+            0.0, -0.0, 1e-13, 0.5, 1.0, 3.7, 11.3, 11.4, 2e6, 8.4e6, 8.5e6, 1e30,
+        ];
         // Around the i64 boundary for both scales.
         for s in [FIXED, FIXED_SQ] {
             let b = I64_RANGE / s;
