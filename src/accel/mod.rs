@@ -137,6 +137,13 @@ pub struct Hit {
     pub b1: f32,
     /// Barycentric coordinate of `v2`.
     pub b2: f32,
+    /// The hit point v0 + b1 e1 + b2 e2 (e1 = v1 - v0, e2 = v2 - v0), and the
+    /// geometric normal e1 × e2 (not normalised), from the BVH's own copy of the
+    /// triangle: the hit record then reads nothing more of the triangle, whose
+    /// packet the traversal has just loaded (on large meshes the scene's own
+    /// vertex arrays are another cache and TLB miss per hit).
+    pub p: Vec3,
+    pub n: Vec3,
 }
 
 /// Flattened BVH2 node (32 bytes), the builder's output. Interior nodes
@@ -193,6 +200,19 @@ impl Tri {
             v0: t[0],
             e1: t[1] - t[0],
             e2: t[2] - t[0],
+        }
+    }
+
+    /// The hit at `t` with barycentrics `b1, b2` on this triangle, input index `prim`.
+    #[inline(always)]
+    fn hit(&self, prim: u32, t: f32, b1: f32, b2: f32) -> Hit {
+        Hit {
+            t,
+            prim,
+            b1,
+            b2,
+            p: self.v0 + self.e1 * b1 + self.e2 * b2,
+            n: self.e1.cross(self.e2),
         }
     }
 
@@ -294,6 +314,17 @@ impl Tri4 {
             e1: v(1),
             e2: v(2),
             ids: lanes,
+        }
+    }
+
+    /// The triangle in `lane`.
+    #[inline(always)]
+    fn lane(&self, lane: usize) -> Tri {
+        let get = |v: &[Vec4; 3]| Vec3::new(v[0][lane], v[1][lane], v[2][lane]);
+        Tri {
+            v0: get(&self.v0),
+            e1: get(&self.e1),
+            e2: get(&self.e2),
         }
     }
 
@@ -866,12 +897,9 @@ impl Bvh {
         if q.best.0 == u32::MAX {
             return None;
         }
-        Some(Hit {
-            t: q.t_best,
-            prim: self.tris[q.best.0 as usize / 4].ids[q.best.0 as usize % 4],
-            b1: q.best.1,
-            b2: q.best.2,
-        })
+        let (packet, lane) = (q.best.0 as usize / 4, q.best.0 as usize % 4);
+        let p = &self.tris[packet];
+        Some(p.lane(lane).hit(p.ids[lane], q.t_best, q.best.1, q.best.2))
     }
 
     /// One traversal step of `q`: the node or leaf `q.cur` is visited and the
@@ -1045,19 +1073,18 @@ impl Bvh {
         live[..n].fill(true);
         let mut left = n;
         while left > 0 {
-            for (q, alive) in st.iter_mut().zip(live.iter_mut()) {
+            for ((q, alive), a) in st.iter_mut().zip(live.iter_mut()).zip(out.iter_mut()) {
                 if *alive && self.step::<N, AVX, true>(q) {
                     *alive = false;
                     left -= 1;
+                    // Answered at once, while the hit's packet is in the cache.
+                    *a = if q.any {
+                        RayAnswer::Occluded(q.best.0 != u32::MAX)
+                    } else {
+                        RayAnswer::Closest(self.closest_of(q))
+                    };
                 }
             }
-        }
-        for (q, a) in st.iter().zip(out.iter_mut()) {
-            *a = if q.any {
-                RayAnswer::Occluded(q.best.0 != u32::MAX)
-            } else {
-                RayAnswer::Closest(self.closest_of(q))
-            };
         }
     }
 

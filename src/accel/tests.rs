@@ -26,15 +26,17 @@ fn brute(tris: &[[Vec3; 3]], ray: &Ray, t_max: f32) -> Option<Hit> {
         }
         let lim = best.map_or(t_max, |h| h.t);
         if let Some((t, b1, b2)) = tri.intersect(ray.o, ray.d, lim) {
-            best = Some(Hit {
-                t,
-                prim: i as u32,
-                b1,
-                b2,
-            });
+            best = Some(tri.hit(i as u32, t, b1, b2));
         }
     }
     best
+}
+
+/// A hit's fields, floats as bits, for bit-for-bit comparisons.
+fn hit_bits(h: &Hit) -> (u32, [u32; 9]) {
+    let (p, n) = (h.p, h.n);
+    let f = [h.t, h.b1, h.b2, p.x, p.y, p.z, n.x, n.y, n.z];
+    (h.prim, f.map(f32::to_bits))
 }
 
 fn is_degenerate(t: &[Vec3; 3]) -> bool {
@@ -132,13 +134,20 @@ fn check_isa_against_brute(
                     assert_eq!(w.t, g.t, "different prim and t: {w:?} {g:?}");
                     ties += 1;
                 } else {
-                    assert_eq!((w.b1, w.b2), (g.b1, g.b2));
+                    // The hit's point and normal, from the BVH's copy of the
+                    // triangle, are those of the input triangle, bit for bit.
+                    assert_eq!(hit_bits(&w), hit_bits(&g));
                 }
                 // Barycentrics reproduce the hit point.
                 let [v0, v1, v2] = tris[g.prim as usize];
                 let p = v0 + (v1 - v0) * g.b1 + (v2 - v0) * g.b2;
                 let q = ray.at(g.t);
                 assert!((p - q).length() < 1e-4 * (1.0 + q.length()), "{p} {q}");
+                assert!(
+                    (g.p - q).length() < 1e-4 * (1.0 + q.length()),
+                    "{} {q}",
+                    g.p
+                );
             }
             _ => panic!("mismatch: brute {want:?} bvh {got:?} for {ray:?} t_max {t_max}"),
         }
@@ -287,10 +296,7 @@ fn instruction_sets_agree_bit_for_bit() {
             rays.iter()
                 .map(|(r, t)| {
                     let h = bvh.intersect(r, *t);
-                    (
-                        h.map(|h| (h.t.to_bits(), h.prim, h.b1.to_bits(), h.b2.to_bits())),
-                        bvh.occluded(r, *t),
-                    )
+                    (h.map(|h| hit_bits(&h)), bvh.occluded(r, *t))
                 })
                 .collect::<Vec<_>>()
         };
@@ -456,10 +462,7 @@ fn interleaved_queries_answer_as_single_ones_bit_for_bit() {
             })
             .collect();
         let key = |a: &RayAnswer| match *a {
-            RayAnswer::Closest(h) => (
-                h.map(|h| (h.t.to_bits(), h.prim, h.b1.to_bits(), h.b2.to_bits())),
-                false,
-            ),
+            RayAnswer::Closest(h) => (h.map(|h| hit_bits(&h)), false),
             RayAnswer::Occluded(o) => (None, o),
         };
         for isa in Isa::available() {

@@ -33,7 +33,6 @@ impl Scene {
     #[inline(always)]
     pub fn prefetch_hit(&self, prim: u32) {
         let i = prim as usize;
-        prefetch_line(self.tris.as_ptr().wrapping_add(i));
         if let Some(a) = self.normals.first_read(i) {
             prefetch_line(a);
         }
@@ -47,10 +46,10 @@ impl Scene {
     #[inline(always)]
     pub fn surface_hit(&self, h: Hit) -> SurfaceHit {
         let i = h.prim as usize;
-        let t = &self.tris[i];
         let b0 = 1.0 - h.b1 - h.b2;
-        let p = t[0] * b0 + t[1] * h.b1 + t[2] * h.b2;
-        let ng = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+        // Position and normal come with the hit, from the BVH's copy of the triangle.
+        let p = h.p;
+        let ng = h.n.normalize();
         let ns = match self.normals.get(i) {
             Some(n) => {
                 let s = (n[0] * b0 + n[1] * h.b1 + n[2] * h.b2).normalize_or_zero();
