@@ -690,6 +690,130 @@ impl<const N: usize> Query<N> {
     }
 }
 
+/// Ray queries answered as they finish, for callers that keep up to [`BATCH`] in
+/// flight and add new ones as answers come back ([`Bvh::stream`]): the traversal
+/// steps of all live queries are interleaved as in [`Bvh::trace`], but a batch no
+/// longer waits for its slowest query, whose lone steps would leave the memory
+/// loads of the others' unoverlapped. The answers are those of [`Bvh::intersect`]
+/// and [`Bvh::occluded`], bit for bit, in whatever order the queries finish.
+pub trait QueryStream {
+    /// Adds a query, answered later with `tag`. At most [`BATCH`] may be live.
+    fn push(&mut self, query: RayQuery, tag: u32);
+    /// Queries added and not yet answered.
+    fn live(&self) -> usize;
+    /// Steps the live queries, round-robin, until at most `until` are left, and
+    /// appends the answers of those that finished to `done`.
+    fn run(&mut self, until: usize, done: &mut Vec<(u32, RayAnswer)>);
+}
+
+/// [`QueryStream`] for a stack size `N` and instruction set `AVX`. Queries stay in
+/// their slots (a query's state is a kilobyte or more); `slot[..n]` are the live
+/// ones', `slot[n..]` the free ones (a finished query's slot is swapped to the end).
+struct Stream<'a, const N: usize, const AVX: bool> {
+    bvh: &'a Bvh,
+    q: [std::mem::MaybeUninit<Query<N>>; BATCH],
+    tag: [u32; BATCH],
+    slot: [u8; BATCH],
+    n: usize,
+}
+
+impl<'a, const N: usize, const AVX: bool> Stream<'a, N, AVX> {
+    fn new(bvh: &'a Bvh) -> Self {
+        Stream {
+            bvh,
+            q: [const { std::mem::MaybeUninit::uninit() }; BATCH],
+            tag: [0; BATCH],
+            slot: std::array::from_fn(|i| i as u8),
+            n: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn run_impl(&mut self, until: usize, done: &mut Vec<(u32, RayAnswer)>) {
+        let bvh = self.bvh;
+        while self.n > until {
+            let mut i = 0;
+            while i < self.n {
+                let k = self.slot[i] as usize;
+                // SAFETY: live slots' queries were written by `push`.
+                let q = unsafe { self.q[k].assume_init_mut() };
+                if !bvh.step::<N, AVX, true>(q) {
+                    i += 1;
+                    continue;
+                }
+                done.push((
+                    self.tag[k],
+                    if q.any {
+                        RayAnswer::Occluded(q.best.0 != u32::MAX)
+                    } else {
+                        // At once, while the hit's packet is in the cache.
+                        RayAnswer::Closest(bvh.closest_of(q))
+                    },
+                ));
+                self.n -= 1;
+                self.slot.swap(i, self.n);
+                if self.n <= until {
+                    return;
+                }
+            }
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn run_avx2(&mut self, until: usize, done: &mut Vec<(u32, RayAnswer)>) {
+        self.run_impl(until, done)
+    }
+
+    #[inline(never)]
+    fn run_base(&mut self, until: usize, done: &mut Vec<(u32, RayAnswer)>) {
+        self.run_impl(until, done)
+    }
+}
+
+impl<const N: usize, const AVX: bool> QueryStream for Stream<'_, N, AVX> {
+    fn push(&mut self, query: RayQuery, tag: u32) {
+        assert!(self.n < BATCH, "at most BATCH queries in flight");
+        let (ray, t_max, any) = match query {
+            RayQuery::Closest(r, t) => (r, t, false),
+            RayQuery::Occluded(r, t) => (r, t, true),
+        };
+        // (An empty tree's queries are answered by `run` without a step.)
+        if !self.bvh.tris.is_empty() {
+            self.bvh.prefetch(self.bvh.root);
+        }
+        let k = self.slot[self.n] as usize;
+        self.q[k].write(Query::new(&ray, t_max, any, self.bvh.root));
+        self.tag[k] = tag;
+        self.n += 1;
+    }
+
+    fn live(&self) -> usize {
+        self.n
+    }
+
+    fn run(&mut self, until: usize, done: &mut Vec<(u32, RayAnswer)>) {
+        if self.bvh.tris.is_empty() {
+            for &k in &self.slot[until..self.n] {
+                let k = k as usize;
+                // SAFETY: live slots' queries were written by `push`.
+                let any = unsafe { self.q[k].assume_init_ref().any };
+                let a = if any { RayAnswer::Occluded(false) } else { RayAnswer::Closest(None) };
+                done.push((self.tag[k], a));
+            }
+            self.n = self.n.min(until);
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // SAFETY: `AVX` streams are only made by `Bvh::stream` for a tree whose
+            // `isa` is AVX2, which is only ever set where the CPU has it.
+            return unsafe { self.run_avx2(until, done) };
+        }
+        self.run_base(until, done)
+    }
+}
+
 /// Traversal stack sizes: the smallest one the tree allows is used (8 bytes
 /// per entry, on the query's stack frame); the large one always suffices
 /// (see `Bvh::build`).
@@ -1088,6 +1212,26 @@ impl Bvh {
                     };
                 }
             }
+        }
+    }
+
+    /// Runs `f` with a [`QueryStream`] over this tree (the traversal compiled for the
+    /// tree's stack size and instruction set, chosen once here).
+    pub fn stream<R>(&self, f: impl FnOnce(&mut dyn QueryStream) -> R) -> R {
+        #[cfg(target_arch = "x86_64")]
+        if self.isa == Isa::Avx2 {
+            return self.stream_sized::<true, R>(f);
+        }
+        self.stream_sized::<false, R>(f)
+    }
+
+    fn stream_sized<const AVX: bool, R>(&self, f: impl FnOnce(&mut dyn QueryStream) -> R) -> R {
+        if self.stack_needed <= TINY_STACK {
+            f(&mut Stream::<TINY_STACK, AVX>::new(self))
+        } else if self.stack_needed <= SMALL_STACK {
+            f(&mut Stream::<SMALL_STACK, AVX>::new(self))
+        } else {
+            f(&mut Stream::<LARGE_STACK, AVX>::new(self))
         }
     }
 
