@@ -16,7 +16,7 @@
 
 use super::rr::{LTilde, Step};
 use super::{Counters, IntegratorSettings};
-use crate::math::{offset_origin, Frame, Ray};
+use crate::math::{offset_origin, Frame, Ray, Vec3};
 use crate::sampling::{power_heuristic, SampleStream};
 use crate::scene::{Scene, SurfaceHit};
 use crate::spectrum::Spectrum;
@@ -51,17 +51,10 @@ pub fn radiance<const N: usize>(
 /// step: its shadow ray and its next segment).
 pub const BATCH_PATHS: usize = crate::accel::BATCH / 2;
 
-/// Queries left in flight when [`radiance_batch`] stops traversing to shade the paths
-/// whose answers are all back (then adds their next queries to those still in flight).
-const STREAM_LOW: usize = 16;
-
 /// [`radiance`] of up to [`BATCH_PATHS`] camera rays at once, each with its own sample
-/// stream, into `out`: the same paths, operation for operation, but their ray queries
-/// are answered by a `QueryStream`, which interleaves the traversal of all those in
-/// flight and so overlaps their memory loads (on scenes larger than the caches). When
-/// only `STREAM_LOW` queries are still in flight, the paths whose answers are all back
-/// are shaded and their next queries join the others: no path waits for the slowest
-/// query of a batch, and the stream stays full.
+/// stream, into `out`: the same paths, operation for operation, but each step's ray
+/// queries of all paths are answered together by `Bvh::trace`, which overlaps their
+/// memory loads (on scenes larger than the caches).
 pub fn radiance_batch<const N: usize>(
     scene: &Scene,
     rays: &[Ray],
@@ -71,62 +64,56 @@ pub fn radiance_batch<const N: usize>(
     c: &mut Counters,
     out: &mut [Spectrum<N>],
 ) {
-    use crate::accel::{Hit, QueryStream, RayAnswer, RayQuery, BATCH};
+    use crate::accel::{RayAnswer, RayQuery};
     let n = rays.len();
     assert!(n <= BATCH_PATHS && streams.len() == n && out.len() == n);
     let mut st = [PathState::<N>::DONE; BATCH_PATHS];
-    // Per path, the answers back so far and how many are still awaited.
-    let mut occluded = [false; BATCH_PATHS];
-    let mut hits: [Option<Hit>; BATCH_PATHS] = [None; BATCH_PATHS];
-    let mut waiting = [0u8; BATCH_PATHS];
-    // Tags: path index * 2, plus 1 for the next segment (0: the shadow ray).
-    let issue = |i: usize, p: &PathState<N>, qs: &mut dyn QueryStream, c: &mut Counters| {
+    for (p, &r) in st.iter_mut().zip(rays) {
+        *p = PathState::new(r, c);
+    }
+    let mut qs = [RayQuery::Occluded(Ray::new(Vec3::ZERO, Vec3::ZERO), 0.0); 2 * BATCH_PATHS];
+    let mut ans = [RayAnswer::Occluded(false); 2 * BATCH_PATHS];
+    loop {
         let mut k = 0;
-        if let Some((r, t_max, _)) = p.shadow {
-            qs.push(RayQuery::Occluded(r, t_max), 2 * i as u32);
-            k += 1;
-        }
-        if let Some(r) = p.ray {
-            c.rays += 1;
-            qs.push(RayQuery::Closest(r, f32::INFINITY), 2 * i as u32 + 1);
-            k += 1;
-        }
-        k
-    };
-    let mut done = Vec::with_capacity(BATCH);
-    scene.bvh.stream(|qs| {
-        for (i, &r) in rays.iter().enumerate() {
-            st[i] = PathState::new(r, c);
-            waiting[i] = issue(i, &st[i], qs, c);
-        }
-        while qs.live() > 0 {
-            done.clear();
-            qs.run(STREAM_LOW.min(qs.live() - 1), &mut done);
-            for (_, a) in &done {
-                if let RayAnswer::Closest(Some(h)) = a {
-                    scene.prefetch_hit(h.prim);
-                }
+        for p in &st[..n] {
+            if let Some((r, t_max, _)) = p.shadow {
+                qs[k] = RayQuery::Occluded(r, t_max);
+                k += 1;
             }
-            for &(tag, a) in &done {
-                let i = (tag / 2) as usize;
-                match a {
-                    RayAnswer::Occluded(o) => occluded[i] = o,
-                    RayAnswer::Closest(h) => hits[i] = h,
-                }
-                waiting[i] -= 1;
-                if waiting[i] > 0 {
-                    continue;
-                }
-                let p = &mut st[i];
-                p.resolve(std::mem::take(&mut occluded[i]));
-                if let Some(ray) = p.ray {
-                    let hit = hits[i].take().map(|h| scene.surface_hit(h));
-                    p.advance(scene, &ray, hit, &mut streams[i], set, l_tilde, c);
-                }
-                waiting[i] = issue(i, p, qs, c);
+            if let Some(r) = p.ray {
+                c.rays += 1;
+                qs[k] = RayQuery::Closest(r, f32::INFINITY);
+                k += 1;
             }
         }
-    });
+        if k == 0 {
+            break;
+        }
+        scene.bvh.trace(&qs[..k], &mut ans[..k]);
+        for a in &ans[..k] {
+            if let RayAnswer::Closest(Some(h)) = a {
+                scene.prefetch_hit(h.prim);
+            }
+        }
+        let mut a = ans[..k].iter();
+        for (p, s) in st[..n].iter_mut().zip(streams.iter_mut()) {
+            if p.shadow.is_some() {
+                let Some(RayAnswer::Occluded(o)) = a.next() else {
+                    unreachable!("answers follow the queries")
+                };
+                p.resolve(*o);
+            } else {
+                p.resolve(false);
+            }
+            if let Some(ray) = p.ray {
+                let Some(RayAnswer::Closest(h)) = a.next() else {
+                    unreachable!("answers follow the queries")
+                };
+                let hit = h.map(|h| scene.surface_hit(h));
+                p.advance(scene, &ray, hit, s, set, l_tilde, c);
+            }
+        }
+    }
     for (o, p) in out.iter_mut().zip(st[..n].iter_mut()) {
         // A last estimate term (the path ended with no shadow ray) is still to add.
         p.resolve(false);
