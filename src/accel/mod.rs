@@ -653,8 +653,7 @@ pub enum RayAnswer {
 
 /// Queries [`Bvh::trace`] keeps in flight at once. On the 1M-triangle room at two
 /// threads (stop 27, after the hit record moved to the BVH's packets), 64 against 32:
-/// 1.079x, every round above 1.05; 96: 1.02x (noise); 128: 0.94x. With 64, the
-/// prefetches already fill the core's outstanding-miss slots.
+/// 1.079x, every round above 1.05; 96: 1.02x (noise); 128: 0.94x.
 pub const BATCH: usize = 64;
 
 /// Trees larger than this answer queries faster through [`Bvh::trace`]
