@@ -15,6 +15,11 @@
 #               triangles (bench/heightfield.py, written by this script; diffuse only, so both
 #               render the same BSDFs), 128x128, depth 8, no roulette
 #   mesh-1      the mesh on one core against scalar_rgb (pinned as cornell-1)
+#   room        an interior of the size users render: assets/scenes/room.obj (4,226 triangles:
+#               walls, furniture, four ceiling lights), its materials made diffuse (Kd, Ke; the
+#               floor's Phong lobe dropped, as render_obj.py reads only Kd and Ke) in a copy under
+#               /tmp, 256x256, depth 8, no roulette, from kalos' default camera in the room
+#   room-1      the room on one core against scalar_rgb (pinned as cornell-1)
 #   all         all of the above
 #
 # Before the figures it prints the CPU model, its vector extensions and the SIMD path kalos
@@ -49,6 +54,9 @@ MI_OUT=/tmp/mitsuba-bench.exr
 K_OUT=/tmp/kalos-bench.exr
 K_STATS=/tmp/kalos-stats.json
 MESH_CAM=(0 1.3 0.95 0 0 -0.3 0 1 0 60)
+ROOM_DIR=/tmp/kalos-bench-room
+ROOM=$ROOM_DIR/room.obj
+ROOM_CAM=(5.6786 1.5 3.2143 4.6786 1.5 3.2143 0 1 0 60)
 
 die() { echo "compare-mitsuba: ERROR: $*" >&2; exit 1; }
 
@@ -58,13 +66,13 @@ die() { echo "compare-mitsuba: ERROR: $*" >&2; exit 1; }
 [[ -f "$MITSUBA_DIR/render_obj.py" && -f "$MITSUBA_DIR/cornell-box.obj" ]] \
     || die "render_obj.py / cornell-box.obj not found in $MITSUBA_DIR"
 export DRJIT_LIBLLVM_PATH="$LIBLLVM_PATH"
-[[ $CASES == all ]] && CASES="cornell cornell-1 cornell-rr mesh mesh-1"
+[[ $CASES == all ]] && CASES="cornell cornell-1 cornell-rr mesh mesh-1 room room-1"
 for c in $CASES; do
-    case $c in cornell | cornell-1 | cornell-rr | mesh | mesh-1) ;;
-    *) die "unknown case '$c' in CASES (cornell, cornell-1, cornell-rr, mesh, mesh-1, all)" ;;
+    case $c in cornell | cornell-1 | cornell-rr | mesh | mesh-1 | room | room-1) ;;
+    *) die "unknown case '$c' in CASES (cornell, cornell-1, cornell-rr, mesh, mesh-1, room, room-1, all)" ;;
     esac
 done
-if [[ " $CASES " == *" cornell-1 "* || " $CASES " == *" mesh-1 "* ]]; then
+if [[ " $CASES " == *"-1 "* ]]; then
     command -v taskset >/dev/null || die "the one-core cases need taskset (util-linux)"
 fi
 
@@ -105,12 +113,20 @@ if [[ " $CASES " == *" mesh"* && ! -s $MESH ]]; then
     "$MITSUBA_VENV/bin/python" bench/heightfield.py "$MESH" 1000000 || die "could not generate $MESH"
 fi
 
+if [[ " $CASES " == *" room"* ]]; then
+    mkdir -p "$ROOM_DIR" || die "could not create $ROOM_DIR"
+    cp assets/scenes/room.obj "$ROOM" || die "assets/scenes/room.obj not found (run from the repository)"
+    grep -vE '^[[:space:]]*(Ks|Ns|illum)[[:space:]]' assets/scenes/room.mtl >"$ROOM_DIR/room.mtl" \
+        || die "could not write $ROOM_DIR/room.mtl"
+fi
+
 # run_mitsuba OBJ SPP RES MAX_DEPTH RR_DEPTH VARIANT THREADS PIN -> "paths_per_s mean"
 run_mitsuba() {
     local obj=$1 spp=$2 res=$3 depth=$4 rr=$5 variant=$6 threads=$7 pin=$8
     local args=("$obj" "$MI_OUT" --spp "$spp" --res "$res" "$res" --max-depth "$depth"
         --rr-depth "$rr" --variant "$variant")
     [[ $obj == "$MESH" ]] && args+=(--cam "${MESH_CAM[@]}")
+    [[ $obj == "$ROOM" ]] && args+=(--cam "${ROOM_CAM[@]}")
     # Match kalos' thread count when the machine has more cores. Dr.Jit deadlocks with one
     # thread (and so when pinned to one core with its default count), so one core is two
     # Dr.Jit threads pinned to CPU 0 by taskset.
@@ -163,9 +179,11 @@ for c in $CASES; do
     case $c in
         cornell*) obj=cornell-box.obj scene=cornell spp=$SPP res=256 ;;
         mesh*) obj=$MESH scene=$MESH spp=$SPP_MESH res=128 ;;
+        room*) obj=$ROOM scene=$ROOM spp=$SPP res=256 ;;
     esac
     kextra=()
     [[ $c == mesh* ]] && kextra=(--camera "$(IFS=,; echo "${MESH_CAM[*]}")")
+    [[ $c == room* ]] && kextra=(--camera "$(IFS=,; echo "${ROOM_CAM[*]}")")
     # One core: both pinned to CPU 0 with two threads each (Dr.Jit deadlocks with one), so
     # that on a loaded machine the scheduler gives both the same share of that core.
     [[ $c == *-1 ]] && threads=2 pin=1 variant=$VARIANT_1
