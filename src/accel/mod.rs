@@ -320,7 +320,12 @@ impl Tri4 {
     /// The triangle in `lane`.
     #[inline(always)]
     fn lane(&self, lane: usize) -> Tri {
-        let get = |v: &[Vec4; 3]| Vec3::new(v[0][lane], v[1][lane], v[2][lane]);
+        // Through the lanes' array: glam's `Vec4` index is a `match`, which compiles to a
+        // jump table whose indirect branch the CPU mispredicts for a random lane.
+        let get = |v: &[Vec4; 3]| {
+            let a = v.map(|x| *x.as_ref());
+            Vec3::new(a[0][lane], a[1][lane], a[2][lane])
+        };
         Tri {
             v0: get(&self.v0),
             e1: get(&self.e1),
