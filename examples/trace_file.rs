@@ -13,7 +13,9 @@ fn main() {
         eprintln!("usage: trace_file SCENE [RAYS]");
         std::process::exit(2);
     };
-    let n: usize = args.next().map_or(1 << 20, |s| s.parse().expect("RAYS: a count"));
+    let n: usize = args
+        .next()
+        .map_or(1 << 20, |s| s.parse().expect("RAYS: a count"));
     let scene = kalos::scene::load(&spec).unwrap_or_else(|e| {
         eprintln!("trace_file: {e}");
         std::process::exit(1)
