@@ -141,9 +141,11 @@ fn bit_identical_for_every_simd_path() {
     }
 }
 
-/// The path tracer's batched samples (interleaved ray queries, which large scenes use)
-/// give the image of one sample at a time, bit for bit, on every instruction set and any
-/// number of threads, with and without roulette.
+/// The path tracer's batches of samples give the same image, bit for bit, whether their
+/// ray queries are answered one after another (as small scenes do) or with their traversal
+/// steps interleaved (as large scenes do), on every instruction set and any number of
+/// threads, with and without roulette. (`integrator::path`'s tests check the batches
+/// against one sample at a time.)
 #[test]
 fn bit_identical_batched_or_not() {
     use kalos::accel::Isa;
@@ -154,8 +156,8 @@ fn bit_identical_batched_or_not() {
         let mut images = Vec::new();
         for isa in Isa::available() {
             assert!(scene.bvh.set_isa(isa));
-            for (batching, threads) in [(false, 1), (true, 1), (true, 3)] {
-                scene.bvh.set_batching(Some(batching));
+            for (interleaved, threads) in [(false, 1), (true, 1), (true, 3)] {
+                scene.bvh.set_interleaving(Some(interleaved));
                 let pool = rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
                     .build()
@@ -163,12 +165,12 @@ fn bit_identical_batched_or_not() {
                 let film = pool.install(|| render_spp(&scene, &set, 8));
                 let img: Vec<_> = film.pixels.iter().map(|p| p.mean()).collect();
                 images.push((
-                    format!("{} batched={batching} threads={threads}", isa.name()),
+                    format!("{} interleaved={interleaved} threads={threads}", isa.name()),
                     img,
                 ));
             }
         }
-        scene.bvh.set_batching(None);
+        scene.bvh.set_interleaving(None);
         for (what, img) in &images[1..] {
             assert!(
                 *img == images[0].1,

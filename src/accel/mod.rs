@@ -439,8 +439,8 @@ pub struct Bvh {
     tris: Vec<Tri4>,
     /// Instruction set the queries run with.
     isa: Isa,
-    /// [`Bvh::prefers_batches`] forced (tests, benchmarks); `None`: by size.
-    batching: Option<bool>,
+    /// [`Bvh::interleaves`] forced (tests, benchmarks); `None`: by size.
+    interleave: Option<bool>,
 }
 
 /// Slack on the far slab distance that makes the box test conservative
@@ -661,8 +661,8 @@ pub enum RayAnswer {
 /// 1.079x, every round above 1.05; 96: 1.02x (noise); 128: 0.94x.
 pub const BATCH: usize = 64;
 
-/// Trees larger than this answer queries faster through [`Bvh::trace`]
-/// ([`Bvh::prefers_batches`]).
+/// Trees larger than this answer [`Bvh::trace`]'s queries faster with their steps
+/// interleaved ([`Bvh::interleaves`]).
 pub const BATCH_MIN_BYTES: usize = 8 << 20;
 
 /// A query's traversal state.
@@ -730,7 +730,7 @@ impl Bvh {
                 leaf_count: 0,
                 tris: Vec::new(),
                 isa: Isa::chosen(),
-                batching: None,
+                interleave: None,
             };
         }
         assert!(refs.len() < 1 << 28, "too many triangles for one BVH");
@@ -775,22 +775,23 @@ impl Bvh {
             leaf_count: leaves,
             tris: packets,
             isa: Isa::chosen(),
-            batching: None,
+            interleave: None,
         }
     }
 
-    /// Whether queries had better go through [`Bvh::trace`] than one at a time: when
-    /// the tree is larger than [`BATCH_MIN_BYTES`], so that queries wait on memory
-    /// (interleaving costs a fifth of the speed of a tree that sits in the caches).
-    pub fn prefers_batches(&self) -> bool {
-        self.batching
+    /// Whether [`Bvh::trace`] interleaves its queries' traversal steps rather than
+    /// answering them one after another: when the tree is larger than
+    /// [`BATCH_MIN_BYTES`], so that queries wait on memory (interleaving costs a fifth of
+    /// the speed of a tree that sits in the caches).
+    pub fn interleaves(&self) -> bool {
+        self.interleave
             .unwrap_or(self.memory_bytes() > BATCH_MIN_BYTES)
     }
 
-    /// Forces [`Bvh::prefers_batches`] (`None`: decided by the tree's size again), for
+    /// Forces [`Bvh::interleaves`] (`None`: decided by the tree's size again), for
     /// tests and benchmarks that compare the two ways of answering queries.
-    pub fn set_batching(&mut self, batching: Option<bool>) {
-        self.batching = batching;
+    pub fn set_interleaving(&mut self, interleave: Option<bool>) {
+        self.interleave = interleave;
     }
 
     /// Instruction set the queries run with.
@@ -1012,10 +1013,14 @@ impl Bvh {
         }
     }
 
-    /// Answers many queries at once, interleaving their traversal steps (see
-    /// [`Bvh::step`]): on trees larger than the caches each query waits on
-    /// memory, and another's step runs meanwhile. The answers are those of
-    /// [`Bvh::intersect`] and [`Bvh::occluded`], bit for bit.
+    /// Answers many queries at once: the answers of [`Bvh::intersect`] and
+    /// [`Bvh::occluded`], bit for bit. On trees larger than the caches
+    /// ([`Bvh::interleaves`]) their traversal steps are interleaved (see [`Bvh::step`]):
+    /// each query waits on memory, and another's step runs meanwhile. Smaller trees
+    /// answer them one after another, which still pays over queries spread among the
+    /// shading of their paths (stop 29: the room of `bench/compare-mitsuba.sh` 1.05x,
+    /// the Cornell box 1.03x, one thread; the traversal's branches and code stay warm,
+    /// and the core overlaps the end of one query with the start of the next).
     pub fn trace(&self, queries: &[RayQuery], answers: &mut [RayAnswer]) {
         assert_eq!(queries.len(), answers.len(), "one answer per query");
         if self.tris.is_empty() {
@@ -1023,6 +1028,15 @@ impl Bvh {
                 *a = match q {
                     RayQuery::Closest(..) => RayAnswer::Closest(None),
                     RayQuery::Occluded(..) => RayAnswer::Occluded(false),
+                };
+            }
+            return;
+        }
+        if !self.interleaves() {
+            for (q, a) in queries.iter().zip(answers.iter_mut()) {
+                *a = match *q {
+                    RayQuery::Closest(r, t) => RayAnswer::Closest(self.intersect(&r, t)),
+                    RayQuery::Occluded(r, t) => RayAnswer::Occluded(self.occluded(&r, t)),
                 };
             }
             return;

@@ -356,16 +356,15 @@ impl Integrator {
         }
     }
 
-    /// Whether [`Integrator::sample_batch`] serves this estimator on `scene`: the path
-    /// tracer without the radiosity gather, on a BVH large enough that interleaved ray
-    /// queries pay (`Bvh::prefers_batches`).
-    pub fn batches(&self, scene: &Scene) -> bool {
+    /// Whether [`Integrator::sample_batch`] serves this estimator: the path tracer without
+    /// the radiosity gather (on any scene: `Bvh::trace` answers a batch's queries the way
+    /// the tree's size favours).
+    pub fn batches(&self) -> bool {
         matches!(self.set.kind, IntegratorKind::Path)
             && !matches!(
                 (&self.radiosity, self.set.gather),
                 (Some(_), Gather::Radiosity)
             )
-            && scene.bvh.prefers_batches()
     }
 
     /// [`Integrator::sample`] of up to [`path::BATCH_PATHS`] samples at once (for an

@@ -54,7 +54,8 @@ pub const BATCH_PATHS: usize = crate::accel::BATCH / 2;
 /// [`radiance`] of up to [`BATCH_PATHS`] camera rays at once, each with its own sample
 /// stream, into `out`: the same paths, operation for operation, but each step's ray
 /// queries of all paths are answered together by `Bvh::trace`, which overlaps their
-/// memory loads (on scenes larger than the caches).
+/// memory loads on scenes larger than the caches and keeps the traversal's code and
+/// branch history warm on the others.
 pub fn radiance_batch<const N: usize>(
     scene: &Scene,
     rays: &[Ray],
@@ -517,8 +518,17 @@ mod tests {
             env!("CARGO_MANIFEST_DIR"),
             "/scenes/mitsuba/spheres-envmap.xml"
         );
-        for name in ["cornell-glossy", "caustic", "furnace-glossy", xml] {
-            let scene = crate::scene::load(name).unwrap();
+        for (name, interleaved) in [
+            ("cornell-glossy", false),
+            ("cornell-glossy", true),
+            ("caustic", false),
+            ("furnace-glossy", true),
+            (xml, false),
+        ] {
+            let mut scene = crate::scene::load(name).unwrap();
+            // A batch's queries one after another or interleaved (small trees answer them
+            // the first way, large ones the second).
+            scene.bvh.set_interleaving(Some(interleaved));
             use crate::integrator::rr::RrMode;
             for rr in [RrMode::Off, RrMode::Classic, RrMode::SpectralEstimate] {
                 let mut set = IntegratorSettings::default();

@@ -149,8 +149,8 @@ fn pass<const N: usize>(
     let w = film.width as usize;
     let h = film.pixels.len() / w.max(1);
     let splatting = film.splats.is_some();
-    // Large scenes: the path tracer's samples in batches (`Integrator::sample_batch`).
-    let batched = !splatting && p.integrator.batches(p.scene);
+    // The path tracer's samples in batches (`Integrator::sample_batch`).
+    let batched = !splatting && p.integrator.batches();
     // One row: its samples into its pixels (or, when splatting, into the row's list; when
     // split, the light seen directly into the visible film's row), and (if asked) each
     // pixel's rays.
