@@ -1018,9 +1018,9 @@ impl Bvh {
     /// ([`Bvh::interleaves`]) their traversal steps are interleaved (see [`Bvh::step`]):
     /// each query waits on memory, and another's step runs meanwhile. Smaller trees
     /// answer them one after another, which still pays over queries spread among the
-    /// shading of their paths (stop 29: the room of `bench/compare-mitsuba.sh` 1.05x,
-    /// the Cornell box 1.03x, one thread; the traversal's branches and code stay warm,
-    /// and the core overlaps the end of one query with the start of the next).
+    /// shading of their paths: the traversal's code and branch history stay warm (stop
+    /// 29, two threads: the room of `bench/compare-mitsuba.sh` 1.08x paths/s, the
+    /// Cornell box 1.08x; `docs/results/throughput/ab-*-2threads-seq-stop29.txt`).
     pub fn trace(&self, queries: &[RayQuery], answers: &mut [RayAnswer]) {
         assert_eq!(queries.len(), answers.len(), "one answer per query");
         if self.tris.is_empty() {
