@@ -141,11 +141,10 @@ fn bit_identical_for_every_simd_path() {
     }
 }
 
-/// The path tracer's batches of samples give the same image, bit for bit, whether their
-/// ray queries are answered one after another (as small scenes do) or with their traversal
-/// steps interleaved (as large scenes do), on every instruction set and any number of
-/// threads, with and without roulette. (`integrator::path`'s tests check the batches
-/// against one sample at a time.)
+/// The path tracer's batches of samples give the image of one sample at a time, bit for
+/// bit, whether their ray queries are answered one after another (as small scenes do) or
+/// with their traversal steps interleaved (as large scenes do), on every instruction set
+/// and any number of threads, with and without roulette.
 #[test]
 fn bit_identical_batched_or_not() {
     use kalos::accel::Isa;
@@ -171,6 +170,28 @@ fn bit_identical_batched_or_not() {
             }
         }
         scene.bvh.set_interleaving(None);
+        // One sample at a time: a pass that counts each pixel's rays takes no batches.
+        {
+            use kalos::film::Film;
+            use kalos::integrator::Integrator;
+            use kalos::pipeline::{render_pass, Counts, Pass, Silent};
+            let integrator =
+                Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap();
+            let mut film = Film::new(set.width, set.height).unwrap();
+            let mut rays = vec![0u64; film.pixels.len()];
+            let pass = Pass {
+                scene: &scene,
+                integrator: &integrator,
+                set: &set,
+                counts: Counts::Uniform(8),
+                first_index: 0,
+                stream: 0,
+                progress: &Silent,
+            };
+            render_pass(&pass, &mut film, Some(&mut rays));
+            let img: Vec<_> = film.pixels.iter().map(|p| p.mean()).collect();
+            images.push(("one sample at a time".to_string(), img));
+        }
         for (what, img) in &images[1..] {
             assert!(
                 *img == images[0].1,
