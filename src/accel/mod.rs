@@ -1020,7 +1020,9 @@ impl Bvh {
     /// answer them one after another, which still pays over queries spread among the
     /// shading of their paths: the traversal's code and branch history stay warm (stop
     /// 29, two threads: the room of `bench/compare-mitsuba.sh` 1.08x paths/s, the
-    /// Cornell box 1.08x; `docs/results/throughput/ab-*-2threads-seq-stop29.txt`).
+    /// Cornell box 1.08x; `docs/results/throughput/ab-*-2threads-seq-stop29.txt`). Both
+    /// ways set up every query's state first, in one loop (then one after another:
+    /// Cornell box 1.03x, room 1.02x, `ab-*-2threads-setup-first-stop29.txt`).
     pub fn trace(&self, queries: &[RayQuery], answers: &mut [RayAnswer]) {
         assert_eq!(queries.len(), answers.len(), "one answer per query");
         if self.tris.is_empty() {
@@ -1032,50 +1034,50 @@ impl Bvh {
             }
             return;
         }
-        if !self.interleaves() {
-            for (q, a) in queries.iter().zip(answers.iter_mut()) {
-                *a = match *q {
-                    RayQuery::Closest(r, t) => RayAnswer::Closest(self.intersect(&r, t)),
-                    RayQuery::Occluded(r, t) => RayAnswer::Occluded(self.occluded(&r, t)),
-                };
-            }
-            return;
-        }
+        let il = self.interleaves();
         for (q, a) in queries.chunks(BATCH).zip(answers.chunks_mut(BATCH)) {
-            match self.isa {
+            match (self.isa, il) {
                 // SAFETY: as in `intersect`.
                 #[cfg(target_arch = "x86_64")]
-                Isa::Avx2 => unsafe { self.trace_avx2(q, a) },
-                _ => self.trace_base(q, a),
+                (Isa::Avx2, true) => unsafe { self.trace_avx2::<true>(q, a) },
+                #[cfg(target_arch = "x86_64")]
+                (Isa::Avx2, false) => unsafe { self.trace_avx2::<false>(q, a) },
+                (_, true) => self.trace_base::<true>(q, a),
+                (_, false) => self.trace_base::<false>(q, a),
             }
         }
     }
 
     #[inline(never)]
-    fn trace_base(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
-        self.trace_sized::<false>(q, a)
+    fn trace_base<const IL: bool>(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
+        self.trace_sized::<false, IL>(q, a)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn trace_avx2(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
-        self.trace_sized::<true>(q, a)
+    unsafe fn trace_avx2<const IL: bool>(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
+        self.trace_sized::<true, IL>(q, a)
     }
 
     #[inline(always)]
-    fn trace_sized<const AVX: bool>(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
+    fn trace_sized<const AVX: bool, const IL: bool>(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
         if self.stack_needed <= TINY_STACK {
-            self.trace_impl::<TINY_STACK, AVX>(q, a)
+            self.trace_impl::<TINY_STACK, AVX, IL>(q, a)
         } else if self.stack_needed <= SMALL_STACK {
-            self.trace_impl::<SMALL_STACK, AVX>(q, a)
+            self.trace_impl::<SMALL_STACK, AVX, IL>(q, a)
         } else {
-            self.trace_impl::<LARGE_STACK, AVX>(q, a)
+            self.trace_impl::<LARGE_STACK, AVX, IL>(q, a)
         }
     }
 
-    /// Up to [`BATCH`] queries, stepped round-robin until all are done.
+    /// Up to [`BATCH`] queries, their states set up first, then stepped round-robin
+    /// until all are done (`IL`) or each to its answer in turn.
     #[inline(always)]
-    fn trace_impl<const N: usize, const AVX: bool>(&self, qs: &[RayQuery], out: &mut [RayAnswer]) {
+    fn trace_impl<const N: usize, const AVX: bool, const IL: bool>(
+        &self,
+        qs: &[RayQuery],
+        out: &mut [RayAnswer],
+    ) {
         debug_assert!(qs.len() <= BATCH);
         let mut st: [std::mem::MaybeUninit<Query<N>>; BATCH] =
             [const { std::mem::MaybeUninit::uninit() }; BATCH];
@@ -1087,9 +1089,20 @@ impl Bvh {
             };
             s.write(Query::new(&ray, t_max, any, self.root));
         }
-        self.prefetch(self.root);
         // SAFETY: the first `n` entries were written above.
         let st = unsafe { &mut *(&mut st[..n] as *mut [_] as *mut [Query<N>]) };
+        if !IL {
+            for (q, a) in st.iter_mut().zip(out.iter_mut()) {
+                while !self.step::<N, AVX, false>(q) {}
+                *a = if q.any {
+                    RayAnswer::Occluded(q.best.0 != u32::MAX)
+                } else {
+                    RayAnswer::Closest(self.closest_of(q))
+                };
+            }
+            return;
+        }
+        self.prefetch(self.root);
         let mut live = [false; BATCH];
         live[..n].fill(true);
         let mut left = n;
