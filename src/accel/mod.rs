@@ -22,7 +22,7 @@
 //!
 //! On large trees traversal waits on memory: the children a node query will
 //! visit later are prefetched when they are pushed, and on Linux the node and
-//! triangle arrays are given to transparent huge pages (`madvise`), which cuts
+//! triangle arrays are copied onto transparent huge pages (`madvise`), which cuts
 //! TLB misses.
 //!
 //! Run-time dispatch ([`Isa`]): the same traversal code is compiled twice, for
@@ -750,14 +750,10 @@ impl Bvh {
             packets: Vec::with_capacity(nodes2.len() / 2 + 1),
             leaves: 0,
         };
-        // Before the arrays are written, so the kernel can back them with huge
-        // pages as they are first touched.
-        advise_huge_pages(&c.nodes);
-        advise_huge_pages(&c.packets);
         let (root, stack_needed) = c.slot(0);
         let Collapse {
-            mut nodes,
-            mut packets,
+            nodes,
+            packets,
             leaves,
             ..
         } = c;
@@ -765,8 +761,7 @@ impl Bvh {
         // Every 8-wide node spans at least one BVH2 level on every path and
         // the BVH2 depth is bounded by the builder, so this always holds.
         assert!(stack_needed <= LARGE_STACK);
-        nodes.shrink_to_fit();
-        packets.shrink_to_fit();
+        let (nodes, packets) = (on_huge_pages(nodes), on_huge_pages(packets));
         Bvh {
             nodes,
             root,
@@ -1195,26 +1190,46 @@ pub fn prefetch_line<T>(p: *const T) {
     let _ = p;
 }
 
-/// Asks Linux to back the allocation of `v` (the whole 2 MiB pages inside it)
-/// with transparent huge pages; a hint only, so failure is ignored. Arrays of
-/// less than 4 MiB are left alone.
-fn advise_huge_pages<T>(v: &Vec<T>) {
+/// `v` copied into a new allocation of its exact size whose whole 2 MiB pages Linux is
+/// asked to back with transparent huge pages (arrays of 4 MiB or more; smaller ones are
+/// returned as they are), which cuts the TLB misses of traversal on large trees.
+///
+/// The hint must come before the pages are first touched: memory that is already
+/// mapped keeps its 4 KiB pages. The allocator may hand out such memory (glibc's
+/// per-thread arenas reuse what the build freed: stop 31 found the old hint, given to
+/// the build's own vectors, never took effect), so the new allocation's pages are
+/// also released (`MADV_DONTNEED`) before the copy writes them, and the copy's first
+/// touch then maps huge pages. A hint only: failures are ignored.
+fn on_huge_pages<T: Copy>(mut v: Vec<T>) -> Vec<T> {
     #[cfg(target_os = "linux")]
     {
         const HUGE: usize = 2 << 20;
-        let start = v.as_ptr() as usize;
-        let end = start + v.capacity() * std::mem::size_of::<T>();
-        let (a, b) = (start.next_multiple_of(HUGE), end / HUGE * HUGE);
-        if end - start >= 2 * HUGE && b > a {
-            // SAFETY: madvise only changes how the kernel backs these pages of
-            // our own allocation; MADV_HUGEPAGE never changes their contents.
+        let bytes = std::mem::size_of_val(v.as_slice());
+        if bytes < 2 * HUGE {
+            v.shrink_to_fit();
+            return v;
+        }
+        let mut out: Vec<T> = Vec::with_capacity(v.len());
+        let start = out.as_ptr() as usize;
+        let (a, b) = (start.next_multiple_of(HUGE), (start + bytes) / HUGE * HUGE);
+        if b > a {
+            // SAFETY: both calls only change how the kernel backs pages inside `out`'s
+            // own allocation, none of which has been written yet (its length is 0):
+            // MADV_DONTNEED drops whatever the allocator left there (reads would see
+            // zeros; nothing reads them before the copy below writes them).
             unsafe {
                 libc::madvise(a as *mut libc::c_void, b - a, libc::MADV_HUGEPAGE);
+                libc::madvise(a as *mut libc::c_void, b - a, libc::MADV_DONTNEED);
             }
         }
+        out.extend_from_slice(&v);
+        out
     }
     #[cfg(not(target_os = "linux"))]
-    let _ = v;
+    {
+        v.shrink_to_fit();
+        v
+    }
 }
 
 /// SAH cost of visiting an 8-wide node, relative to testing one triangle
