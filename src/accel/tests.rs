@@ -498,3 +498,17 @@ fn interleaved_queries_answer_as_single_ones_bit_for_bit() {
         }
     }
 }
+
+/// The copy onto huge pages keeps every element, on arrays above and below its 4 MiB
+/// threshold and across the 2 MiB pages it releases before writing.
+#[test]
+fn huge_page_copy_keeps_the_contents() {
+    for n in [0usize, 1, 1000, (5 << 20) / 8 + 3] {
+        let v: Vec<u64> = (0..n as u64)
+            .map(|i| i.wrapping_mul(0x9e37_79b9_7f4a_7c15))
+            .collect();
+        let w = on_huge_pages(v.clone());
+        assert_eq!(w.len(), n);
+        assert!(w == v, "{n} elements: the copy differs");
+    }
+}
