@@ -319,7 +319,7 @@ pub fn render(job: &RenderJob, progress: &dyn Progress) -> Result<Rendered, Stri
     job.validate()?;
     let scene = crate::scene::load(&job.scene)?;
     let mut r = render_scene(&scene, job, progress)?;
-    let mut w = scene.warnings.clone();
+    let mut w = scene.warnings_for(job.camera.is_some());
     w.append(&mut r.warnings);
     r.warnings = w;
     Ok(r)

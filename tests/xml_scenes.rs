@@ -273,8 +273,36 @@ fn a_closed_room_without_a_camera_renders_lit() {
     )
     .unwrap();
     let scene: Scene = scene::load(d.join("room.obj").to_str().unwrap()).unwrap();
-    let w = scene.warnings.join("\n");
+    let w = scene.warnings_for(false).join("\n");
     assert!(w.contains("closed room") && w.contains("--camera"), "{w}");
+    // A render with its own camera is not told where the default one went.
+    let w = scene.warnings_for(true).join("\n");
+    assert!(
+        !w.contains("closed room") && !w.contains("no camera"),
+        "{w}"
+    );
+    let room = d.join("room.obj");
+    let kalos = |camera: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_kalos"))
+            .args([
+                "render",
+                room.to_str().unwrap(),
+                "--res",
+                "8x8",
+                "--spp",
+                "1",
+            ])
+            .args(camera)
+            .arg("-o")
+            .arg(d.join("room.exr"))
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    assert!(kalos(&[]).contains("no camera given"));
+    let given = kalos(&["--camera", "0,1,0,1,1,0,0,1,0,60"]);
+    assert!(!given.contains("no camera given"), "{given}");
     assert!(
         scene.info.camera_from.contains("inside"),
         "{}",
@@ -306,7 +334,10 @@ fn a_closed_room_without_a_camera_renders_lit() {
         "{}",
         s.info.camera_from
     );
-    assert!(!s.warnings.iter().any(|w| w.contains("closed room")));
+    assert!(!s
+        .warnings_for(false)
+        .iter()
+        .any(|w| w.contains("closed room")));
 }
 
 #[test]

@@ -141,13 +141,13 @@ impl NativeScene {
         v["default_spp"] = serde_json::json!(s.defaults.spp.unwrap_or(DEFAULT_SPP));
         v["default_res"] = serde_json::json!(s.defaults.res);
         v["default_max_depth"] = serde_json::json!(s.defaults.max_depth);
-        v["warnings"] = serde_json::json!(s.warnings);
+        v["warnings"] = serde_json::json!(s.warnings_for(false));
         serde_json::to_string(&v).unwrap_or_default()
     }
     /// The scene's warnings (unsupported materials, no emitter, ...).
     #[getter]
     fn warnings(&self) -> Vec<String> {
-        self.scene.warnings.clone()
+        self.scene.warnings_for(false)
     }
     /// Samples per pixel when a render gives none (the scene file's, else 64).
     #[getter]
@@ -440,7 +440,7 @@ fn render(
     } else {
         None
     };
-    let mut warnings = scene.scene.warnings.clone();
+    let mut warnings = scene.scene.warnings_for(job.camera.is_some());
     warnings.extend(r.warnings);
     Ok(NativeRendered {
         width,

@@ -144,7 +144,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Filter(cmd) => filter::run(cmd),
         Command::Info { scene, json } => {
             let s = crate::scene::load(&scene)?;
-            for w in &s.warnings {
+            for w in &s.warnings_for(false) {
                 eprintln!("kalos: warning: {w}");
             }
             let i = &s.info;

@@ -50,7 +50,8 @@ pub fn run(a: RadiosityArgs) -> Result<(), String> {
     let set = a.settings;
     set.validate()?;
     let scene = crate::scene::load(&a.scene)?;
-    for w in &scene.warnings {
+    // The solution has no camera: the default camera's warning does not apply.
+    for w in &scene.warnings_for(true) {
         eprintln!("kalos: warning: {w}");
     }
     let (pool, warning) = crate::render::thread_pool(a.threads)?;

@@ -245,7 +245,12 @@ pub struct Scene {
     pub camera: CameraDesc,
     pub defaults: RenderDefaults,
     pub info: SceneInfo,
+    /// Things a user of the scene should know (unsupported materials, no emitter, ...),
+    /// whatever the camera; see [`Scene::warnings_for`].
     pub warnings: Vec<String>,
+    /// The default camera's warning (placed inside a closed room, or seeing no light),
+    /// which holds only for renders that use that camera.
+    pub camera_warning: Option<String>,
 }
 
 impl Scene {
@@ -337,6 +342,7 @@ impl Scene {
         };
         lights.add_distant(points, env, radius);
         let mut warnings = desc.warnings;
+        let mut camera_warning = None;
         let (camera, camera_how) = match desc.camera {
             Some(c) => (c, "scene file".to_string()),
             None => {
@@ -352,9 +358,7 @@ impl Scene {
                     .collect();
                 lights.extend(desc.point_lights.iter().map(|l| l.position));
                 let d = camera::default_camera(&bvh, &bounds, &lights, desc.environment.is_some());
-                if let Some(w) = d.warning {
-                    warnings.push(format!("scene {}: {w}", desc.name));
-                }
+                camera_warning = d.warning.map(|w| format!("scene {}: {w}", desc.name));
                 (d.desc, d.how)
             }
         };
@@ -407,7 +411,16 @@ impl Scene {
             defaults: desc.defaults,
             info,
             warnings,
+            camera_warning,
         })
+    }
+
+    /// What a user of this scene should be told: [`Scene::warnings`], and the default
+    /// camera's warning unless the render gives its own camera (`camera_given`), where it
+    /// would describe a camera that is not used.
+    pub fn warnings_for(&self, camera_given: bool) -> Vec<String> {
+        let camera = self.camera_warning.iter().filter(|_| !camera_given);
+        camera.chain(&self.warnings).cloned().collect()
     }
 
     /// The material of triangle `prim`.
