@@ -937,7 +937,26 @@ impl Bvh {
                     self.prefetch_next::<IL>(q.cur);
                     return false;
                 }
-                // Two or more: push all but the nearest, farthest first.
+                let i0 = mask.trailing_zeros() as usize;
+                let rest = mask & (mask - 1);
+                if rest & (rest - 1) == 0 {
+                    // Exactly two: the nearer goes on (the later lane on a tie, as the
+                    // sort below), the other on the stack, chosen without a branch: a
+                    // branch on the comparison of two children's distances is a coin
+                    // toss for the predictor (the room's rays 1.02-1.03x one at a time).
+                    let i1 = rest.trailing_zeros() as usize;
+                    let second = tn[i0] >= tn[i1];
+                    let (near, far) = (
+                        std::hint::select_unpredictable(second, i1, i0),
+                        std::hint::select_unpredictable(second, i0, i1),
+                    );
+                    self.prefetch(node.child[far]);
+                    q.stack.push(node.child[far], tn[far]);
+                    q.cur = node.child[near];
+                    self.prefetch_next::<IL>(q.cur);
+                    return false;
+                }
+                // Three or more: push all but the nearest, farthest first.
                 let mut m = mask;
                 let mut ids = [0usize; WIDTH];
                 let mut k = 0;
