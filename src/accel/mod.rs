@@ -943,7 +943,7 @@ impl Bvh {
                     // Exactly two: the nearer goes on (the later lane on a tie, as the
                     // sort below), the other on the stack, chosen without a branch: a
                     // branch on the comparison of two children's distances is a coin
-                    // toss for the predictor (the room's rays 1.02-1.03x one at a time).
+                    // toss for the predictor (the room's rays 1.02-1.04x one at a time).
                     let i1 = rest.trailing_zeros() as usize;
                     let second = tn[i0] >= tn[i1];
                     let (near, far) = (

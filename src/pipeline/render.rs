@@ -169,7 +169,9 @@ fn pass<const N: usize>(
         let mut done = 0u64;
         if batched && vis_row.is_none() && row_rays.is_none() && !split_rest {
             // The row's samples in order, a batch of paths at a time (the same values,
-            // pushed in the same order, as one at a time).
+            // pushed in the same order, as one at a time). A pass that counts each pixel's
+            // rays takes them one at a time: `tests/determinism.rs` renders such a pass as
+            // its reference for the batches.
             let jobs: Vec<(u32, u32)> = (0..w)
                 .flat_map(|x| (0..p.counts.get(y * w + x)).map(move |k| (x as u32, k)))
                 .collect();
