@@ -22,8 +22,9 @@
 //!
 //! On large trees traversal waits on memory: the children a node query will
 //! visit later are prefetched when they are pushed, and on Linux the node and
-//! triangle arrays are copied onto transparent huge pages (`madvise`), which cuts
-//! TLB misses.
+//! triangle arrays are copied onto transparent huge pages (`madvise`): fewer pages
+//! to translate (random rays on a 1M-triangle height field 1.00-1.12x as fast, stop 31;
+//! this VM's `perf` has no TLB counters to show the misses themselves).
 //!
 //! Run-time dispatch ([`Isa`]): the same traversal code is compiled twice, for
 //! baseline x86-64 (SSE2) and with AVX2 + FMA enabled (`#[target_feature]`),
@@ -1211,7 +1212,7 @@ pub fn prefetch_line<T>(p: *const T) {
 
 /// `v` copied into a new allocation of its exact size whose whole 2 MiB pages Linux is
 /// asked to back with transparent huge pages (arrays of 4 MiB or more; smaller ones are
-/// returned as they are), which cuts the TLB misses of traversal on large trees.
+/// returned as they are), for fewer page translations in the traversal of large trees.
 ///
 /// The hint must come before the pages are first touched: memory that is already
 /// mapped keeps its 4 KiB pages. The allocator may hand out such memory (glibc's
