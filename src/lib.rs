@@ -6,7 +6,7 @@
 //! [`render`] with a [`RenderJob`].
 // Unsafe code is denied everywhere but `accel`, whose run-time dispatched SIMD traversal
 // must call `#[target_feature]` functions (after checking the CPU) and keeps its stack
-// uninitialised.
+// uninitialised, and the one `#[target_feature]` call of `integrator::lanes`.
 #![deny(unsafe_code)]
 
 pub use render::{render, render_scene, RenderJob, Rendered};

@@ -10,6 +10,7 @@
 
 pub mod bdpt;
 pub mod gather;
+pub mod lanes;
 pub mod path;
 pub mod rr;
 pub mod visible;

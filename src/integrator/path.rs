@@ -14,8 +14,11 @@
 //! and BSDF sampling, MIS-weighted; a ray that leaves the scene sees the environment);
 //! point lights are Dirac, reached by next-event estimation alone.
 
+use super::lanes::Lanes;
 use super::rr::{LTilde, Step};
 use super::{Counters, IntegratorSettings};
+use crate::light::Chosen;
+use crate::material::Bsdf;
 use crate::math::{offset_origin, Frame, Ray, Vec3};
 use crate::sampling::{power_heuristic, SampleStream};
 use crate::scene::{Scene, SurfaceHit};
@@ -37,7 +40,7 @@ pub fn radiance<const N: usize>(
     while let Some(ray) = p.ray {
         c.rays += 1;
         let hit = scene.intersect(&ray, f32::INFINITY);
-        p.advance(scene, &ray, hit, s, set, l_tilde, c);
+        p.advance(scene, &ray, hit, s, set, l_tilde, c, None);
         let occluded = p
             .shadow
             .as_ref()
@@ -74,6 +77,8 @@ pub fn radiance_batch<const N: usize>(
     }
     let mut qs = [RayQuery::Occluded(Ray::new(Vec3::ZERO, Vec3::ZERO), 0.0); 2 * BATCH_PATHS];
     let mut ans = [RayAnswer::Occluded(false); 2 * BATCH_PATHS];
+    // (Only RGB paths end in lanes: see `Lanes::takes`.)
+    let mut lanes = (N == 3).then(Lanes::<N>::default);
     loop {
         let mut k = 0;
         for p in &st[..n] {
@@ -97,7 +102,7 @@ pub fn radiance_batch<const N: usize>(
             }
         }
         let mut a = ans[..k].iter();
-        for (p, s) in st[..n].iter_mut().zip(streams.iter_mut()) {
+        for (i, (p, s)) in st[..n].iter_mut().zip(streams.iter_mut()).enumerate() {
             if p.shadow.is_some() {
                 let Some(RayAnswer::Occluded(o)) = a.next() else {
                     unreachable!("answers follow the queries")
@@ -111,8 +116,21 @@ pub fn radiance_batch<const N: usize>(
                     unreachable!("answers follow the queries")
                 };
                 let hit = h.map(|h| scene.surface_hit(h));
-                p.advance(scene, &ray, hit, s, set, l_tilde, c);
+                let lane = lanes.as_mut().map(|l| (l, i as u8));
+                p.advance(scene, &ray, hit, s, set, l_tilde, c, lane);
             }
+        }
+        // The diffuse vertices handed to the lanes end together.
+        if let Some(lanes) = lanes.as_mut().filter(|l| l.k > 0) {
+            lanes.finish(scene.bvh.isa());
+            for i in 0..lanes.k {
+                let (shadow, next) = lanes.ending(i);
+                let p = &mut st[lanes.path[i] as usize];
+                c.rays += shadow.is_some() as u64;
+                p.shadow = shadow;
+                p.continue_with(next);
+            }
+            lanes.k = 0;
         }
     }
     for (o, p) in out.iter_mut().zip(st[..n].iter_mut()) {
@@ -193,6 +211,7 @@ impl<const N: usize> PathState<N> {
         set: &IntegratorSettings,
         l_tilde: &LTilde<N>,
         c: &mut Counters,
+        lanes: Option<(&mut Lanes<N>, u8)>,
     ) {
         self.ray = None;
         let beta = self.beta;
@@ -236,6 +255,23 @@ impl<const N: usize> PathState<N> {
         let rr = &set.roulette;
         let sel = rr.select::<N>(segments - 1, &beta, &bsdf);
 
+        // A diffuse vertex under the BSDF's own sampling ends in the batch's SIMD lanes.
+        if let (Some((lanes, path)), Bsdf::Diffuse(lam)) = (lanes, &bsdf) {
+            if Lanes::<N>::takes(&bsdf, &sel, rr.mode.uses_estimate()) {
+                if let Some(Chosen::Area(u_area)) = scene.lights.choose(u_sel) {
+                    if let Some(ls) = scene.lights.sample_position(u_area, u_light) {
+                        if !ls.directional {
+                            let (p, kd) = (hit.p, lam.kd);
+                            lanes.push(
+                                path, p, ng, &frame, wo_l, kd, &sel, u_bsdf, u_rr, &ls, &beta,
+                            );
+                            return;
+                        }
+                    }
+                }
+            }
+        }
+
         // Next-event estimation (its shadow ray is answered by `resolve`).
         if !bsdf.is_delta() {
             self.shadow = next_event::<N>(
@@ -248,24 +284,18 @@ impl<const N: usize> PathState<N> {
         let terminated = matches!(step, Step::Terminated);
         let lt = || l_tilde.at(hit.prim, hit.p, wo.dot(hit.ng) > 0.0);
         self.est = rr.estimate_term(&sel, &bsdf, terminated, &beta, lt);
-        let Step::Continue { sample: bs, scale } = step else {
-            return;
-        };
-        let wi = frame.to_world(bs.wi);
-        // Shading normals must not let light through the geometric surface.
-        if (wi.dot(ng) > 0.0) != (bs.wi.z > 0.0) {
-            return;
+        self.continue_with(continuation(hit.p, ng, &frame, step, &beta));
+    }
+
+    /// Takes [`continuation`]'s answer: the next segment, or the end of the walk.
+    #[inline(always)]
+    fn continue_with(&mut self, next: Option<(Ray, Spectrum<N>, f32, bool)>) {
+        if let Some((ray, beta, pdf, delta)) = next {
+            self.beta = beta;
+            self.prev_pdf = pdf;
+            self.prev_delta = delta;
+            self.ray = Some(ray);
         }
-        self.beta *= bs.weight;
-        if scale != 1.0 {
-            self.beta *= scale;
-        }
-        if self.beta.is_black() {
-            return;
-        }
-        self.prev_pdf = bs.pdf;
-        self.prev_delta = bs.delta;
-        self.ray = Some(Ray::new(offset_origin(hit.p, ng, wi), wi));
     }
 }
 
@@ -359,34 +389,151 @@ pub fn next_event<const N: usize>(
         }
     };
     let ls = scene.lights.sample_position(u_area, u_light)?;
-    let d = ls.p - p;
-    let dist2 = d.length_squared();
-    let dist = dist2.sqrt();
-    let wi = d / dist;
-    let cos_l = -wi.dot(ls.n);
-    let wi_l = frame.to_local(wi);
-    if !(cos_l > 0.0 && facing(bsdf, wi, wi_l, ng)) {
+    let shadow = toward_point(
+        p,
+        ng,
+        frame,
+        bsdf.transmits(),
+        |wi_l| bsdf.eval::<N>(wo_l, wi_l),
+        |wi_l| sel.pdf(bsdf, wo_l, wi_l),
+        (ls.p, ls.n, ls.pdf_area),
+        |cos_l| ls.emitted(&scene.lights, cos_l),
+        beta,
+    );
+    c.rays += shadow.is_some() as u64;
+    shadow
+}
+
+/// Next-event estimation toward a sampled point `lp` of an area light (normal `ln`,
+/// density `pdf_area` per unit area, radiance `le(cos)` at cosine cos to its normal): the
+/// shadow ray, its t_max, and beta f Le w / p_light with p_light the point's density
+/// in solid angle, if anything is to add (as [`next_event`]). `f(wi_l)` and `pdf(wi_l)`
+/// are the BSDF's value and the continuation's density toward wi_l (shading frame), and
+/// `transmits` whether it lets light through.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn toward_point<const N: usize>(
+    p: Vec3,
+    ng: Vec3,
+    frame: &Frame,
+    transmits: bool,
+    f: impl FnOnce(Vec3) -> Spectrum<N>,
+    pdf: impl FnOnce(Vec3) -> f32,
+    light: (Vec3, Vec3, f32),
+    le: impl FnOnce(f32) -> [f32; 3],
+    beta: &Spectrum<N>,
+) -> Option<(Ray, f32, Spectrum<N>)> {
+    let to = ToPoint::new(p, frame, light);
+    if !(to.cos_l > 0.0 && facing(transmits, to.wi, to.wi_l, ng)) {
         return None;
     }
-    let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z.abs();
+    let f = f(to.wi_l) * to.wi_l.z.abs();
     if f.is_black() {
         return None;
     }
-    let o = offset_origin(p, ng, wi);
-    let to = ls.p - o;
-    c.rays += 1;
-    let pdf_light = ls.pdf_area * dist2 / cos_l;
-    let w = power_heuristic(pdf_light, sel.pdf(bsdf, wo_l, wi_l));
-    let le = ls.emitted(&scene.lights, cos_l);
-    let e = *beta * f * Spectrum::from_rgb(le) * (w / pdf_light);
-    Some((Ray::new(o, to), 1.0 - 1e-4, e))
+    Some(to.estimate(p, ng, f, pdf(to.wi_l), le(to.cos_l), beta))
+}
+
+/// The direction and distance from a vertex to a light point (the part of
+/// [`toward_point`] before the BSDF).
+#[derive(Clone, Copy)]
+pub struct ToPoint {
+    pub wi: Vec3,
+    /// wi in the shading frame.
+    pub wi_l: Vec3,
+    /// Cosine at the light, squared distance, the light point and its density per area.
+    pub cos_l: f32,
+    dist2: f32,
+    lp: Vec3,
+    pdf_area: f32,
+}
+
+impl ToPoint {
+    #[inline(always)]
+    pub fn new(p: Vec3, frame: &Frame, (lp, ln, pdf_area): (Vec3, Vec3, f32)) -> Self {
+        let d = lp - p;
+        let dist2 = d.length_squared();
+        let dist = dist2.sqrt();
+        let wi = d / dist;
+        ToPoint {
+            wi,
+            wi_l: frame.to_local(wi),
+            cos_l: -wi.dot(ln),
+            dist2,
+            lp,
+            pdf_area,
+        }
+    }
+
+    /// The shadow ray, its t_max, and beta f Le w / p_light, given f |cos| and the
+    /// continuation's density `pdf_bsdf` toward wi (the MIS weight w is the power
+    /// heuristic of p_light against it).
+    #[inline(always)]
+    pub fn estimate<const N: usize>(
+        &self,
+        p: Vec3,
+        ng: Vec3,
+        f: Spectrum<N>,
+        pdf_bsdf: f32,
+        le: [f32; 3],
+        beta: &Spectrum<N>,
+    ) -> (Ray, f32, Spectrum<N>) {
+        let o = offset_origin(p, ng, self.wi);
+        let to = self.lp - o;
+        let pdf_light = self.pdf_area * self.dist2 / self.cos_l;
+        let w = power_heuristic(pdf_light, pdf_bsdf);
+        let e = *beta * f * Spectrum::from_rgb(le) * (w / pdf_light);
+        (Ray::new(o, to), 1.0 - 1e-4, e)
+    }
+}
+
+/// The path's next segment after the reflection `step` at `p` (geometric normal `ng`,
+/// shading frame `frame`) reached with throughput `beta`: the ray, the new throughput,
+/// and the sample's density and delta flag; `None` if the path ends here.
+#[inline(always)]
+pub fn continuation<const N: usize>(
+    p: Vec3,
+    ng: Vec3,
+    frame: &Frame,
+    step: Step<N>,
+    beta: &Spectrum<N>,
+) -> Option<(Ray, Spectrum<N>, f32, bool)> {
+    let Step::Continue { sample: bs, scale } = step else {
+        return None;
+    };
+    let (ok, ray, beta) = continued(p, ng, frame, &bs, scale, beta);
+    ok.then_some((ray, beta, bs.pdf, bs.delta))
+}
+
+/// [`continuation`] after a sample `bs` (and its roulette `scale`), without a branch:
+/// whether the path goes on (the direction is on the side of the geometric normal that
+/// the sample's is of the shading normal, and the throughput is not black), the ray, the
+/// new throughput.
+#[inline(always)]
+pub fn continued<const N: usize>(
+    p: Vec3,
+    ng: Vec3,
+    frame: &Frame,
+    bs: &crate::material::BsdfSample<N>,
+    scale: f32,
+    beta: &Spectrum<N>,
+) -> (bool, Ray, Spectrum<N>) {
+    let wi = frame.to_world(bs.wi);
+    // Shading normals must not let light through the geometric surface.
+    let side = (wi.dot(ng) > 0.0) == (bs.wi.z > 0.0);
+    let mut beta = *beta * bs.weight;
+    if scale != 1.0 {
+        beta *= scale;
+    }
+    let ray = Ray::new(offset_origin(p, ng, wi), wi);
+    (side && !beta.is_black(), ray, beta)
 }
 
 /// May light arrive from `wi` (world; `wi_l` in the shading frame)? On the side of the
 /// geometric and the shading normal alike, and on the front unless the BSDF transmits.
 #[inline(always)]
-fn facing(
-    bsdf: &crate::material::Bsdf,
+pub fn facing(
+    transmits: bool,
     wi: crate::math::Vec3,
     wi_l: crate::math::Vec3,
     ng: crate::math::Vec3,
@@ -394,7 +541,7 @@ fn facing(
     if wi_l.z > 0.0 {
         wi.dot(ng) > 0.0
     } else {
-        bsdf.transmits() && wi_l.z < 0.0 && wi.dot(ng) < 0.0
+        transmits && wi_l.z < 0.0 && wi.dot(ng) < 0.0
     }
 }
 
@@ -428,7 +575,7 @@ fn next_event_distant<const N: usize>(
             }
             let wi = d / dist2.sqrt();
             let wi_l = frame.to_local(wi);
-            if !facing(bsdf, wi, wi_l, ng) {
+            if !facing(bsdf.transmits(), wi, wi_l, ng) {
                 return None;
             }
             let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z.abs();
@@ -445,7 +592,7 @@ fn next_event_distant<const N: usize>(
             let (wi, pdf, le) = env.sample(u_light)?;
             let pdf_light = pdf * pmf;
             let wi_l = frame.to_local(wi);
-            if !(pdf_light > 0.0 && facing(bsdf, wi, wi_l, ng)) {
+            if !(pdf_light > 0.0 && facing(bsdf.transmits(), wi, wi_l, ng)) {
                 return None;
             }
             let f = bsdf.eval::<N>(wo_l, wi_l) * wi_l.z.abs();

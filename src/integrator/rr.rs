@@ -306,16 +306,11 @@ impl Roulette {
                 return sel;
             }
         }
-        Selection {
-            select: BsdfSelect::Mixture,
-            s: [0.0; MAX_LOBES],
-            n: 0,
-            s_total: if self.active(bounce) {
-                self.continuation(bounce, f, &bsdf.albedo::<N>())
-            } else {
-                1.0
-            },
-        }
+        Selection::mixture(if self.active(bounce) {
+            self.continuation(bounce, f, &bsdf.albedo::<N>())
+        } else {
+            1.0
+        })
     }
 
     #[inline(never)]
@@ -364,6 +359,24 @@ impl Roulette {
 }
 
 impl Selection {
+    /// The mixture selection (the BSDF's own sampling) whose walk goes on with
+    /// probability `s_total` (1: no roulette here), as [`Roulette::select`] makes it.
+    #[inline(always)]
+    pub fn mixture(s_total: f32) -> Selection {
+        Selection {
+            select: BsdfSelect::Mixture,
+            s: [0.0; MAX_LOBES],
+            n: 0,
+            s_total,
+        }
+    }
+
+    /// Whether this is the mixture selection (see [`Selection::mixture`]).
+    #[inline(always)]
+    pub fn is_mixture(&self) -> bool {
+        self.select == BsdfSelect::Mixture
+    }
+
     /// s_i of lobe i (methods 1-3).
     pub fn probabilities(&self) -> &[f32] {
         &self.s[..self.n]
@@ -410,19 +423,24 @@ impl Selection {
         u_rr: f32,
     ) -> Step<N> {
         if self.select == BsdfSelect::Mixture {
-            let q = self.s_total;
-            if q < 1.0 && u_rr >= q {
+            let (goes_on, scale) = self.roulette(u_rr);
+            if !goes_on {
                 return Step::Terminated;
             }
             return match bsdf.sample::<N>(wo, u_lobe, u_dir) {
-                Some(sample) => Step::Continue {
-                    sample,
-                    scale: if q < 1.0 { 1.0 / q } else { 1.0 },
-                },
+                Some(sample) => Step::Continue { sample, scale },
                 None => Step::Absorbed,
             };
         }
         self.sample_lobe(bsdf, wo, u_lobe, u_dir)
+    }
+
+    /// The mixture's roulette: whether the walk goes on (with probability s, by `u_rr`),
+    /// and the throughput's scale if it does (1/s).
+    #[inline(always)]
+    pub fn roulette(&self, u_rr: f32) -> (bool, f32) {
+        let q = self.s_total;
+        (!(q < 1.0 && u_rr >= q), if q < 1.0 { 1.0 / q } else { 1.0 })
     }
 
     /// Methods 1-3: `u_lobe` chooses lobe i or termination, then lobe i samples wi.

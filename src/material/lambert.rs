@@ -12,21 +12,21 @@ pub struct Lambert {
 }
 
 impl Lambert {
-    #[inline]
+    #[inline(always)]
     pub fn eval<const N: usize>(&self, wo: Vec3, wi: Vec3) -> Spectrum<N> {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Spectrum::ZERO;
         }
         Spectrum::from_rgb(self.kd) * FRAC_1_PI
     }
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z <= 0.0 {
             return 0.0;
         }
         pdf_cosine_hemisphere(wi)
     }
-    #[inline]
+    #[inline(always)]
     pub fn sample_dir(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {
         if wo.z <= 0.0 {
             return None;
@@ -34,15 +34,21 @@ impl Lambert {
         let wi = square_to_cosine_hemisphere(u);
         (wi.z > 0.0).then_some(wi)
     }
-    #[inline]
+    #[inline(always)]
     pub fn sample<const N: usize>(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample<N>> {
-        let wi = self.sample_dir(wo, u)?;
+        let s = self.sample_any(u);
+        (wo.z > 0.0 && s.wi.z > 0.0).then_some(s)
+    }
+    /// [`Self::sample`] before its checks (wo above the surface, wi strictly above).
+    #[inline(always)]
+    pub fn sample_any<const N: usize>(&self, u: Vec2) -> BsdfSample<N> {
+        let wi = square_to_cosine_hemisphere(u);
         // f cos / pdf = (kd/pi) cos / (cos/pi) = kd
-        Some(BsdfSample {
+        BsdfSample {
             wi,
             weight: Spectrum::from_rgb(self.kd),
             pdf: pdf_cosine_hemisphere(wi),
             delta: false,
-        })
+        }
     }
 }
