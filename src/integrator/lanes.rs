@@ -32,15 +32,10 @@ enum In {
     Ngx,
     Ngy,
     Ngz,
-    Sx,
-    Sy,
-    Sz,
-    Tx,
-    Ty,
-    Tz,
-    Nx,
-    Ny,
-    Nz,
+    /// The shading normal and wo (world).
+    Nsx,
+    Nsy,
+    Nsz,
     Wox,
     Woy,
     Woz,
@@ -131,8 +126,8 @@ impl<const N: usize> Lanes<N> {
         path: u8,
         p: Vec3,
         ng: Vec3,
-        frame: &Frame,
-        wo_l: Vec3,
+        ns: Vec3,
+        wo: Vec3,
         kd: [f32; 3],
         sel: &Selection,
         u_bsdf: glam::Vec2,
@@ -150,18 +145,12 @@ impl<const N: usize> Lanes<N> {
             ng.x,
             ng.y,
             ng.z,
-            frame.s.x,
-            frame.s.y,
-            frame.s.z,
-            frame.t.x,
-            frame.t.y,
-            frame.t.z,
-            frame.n.x,
-            frame.n.y,
-            frame.n.z,
-            wo_l.x,
-            wo_l.y,
-            wo_l.z,
+            ns.x,
+            ns.y,
+            ns.z,
+            wo.x,
+            wo.y,
+            wo.z,
             u_bsdf.x,
             u_bsdf.y,
             u_rr,
@@ -219,12 +208,8 @@ impl<const N: usize> Lanes<N> {
             let v3 = |a: In, b: In, c: In| Vec3::new(x(a), x(b), x(c));
             let p = v3(In::Px, In::Py, In::Pz);
             let ng = v3(In::Ngx, In::Ngy, In::Ngz);
-            let frame = Frame {
-                s: v3(In::Sx, In::Sy, In::Sz),
-                t: v3(In::Tx, In::Ty, In::Tz),
-                n: v3(In::Nx, In::Ny, In::Nz),
-            };
-            let wo_l = v3(In::Wox, In::Woy, In::Woz);
+            let frame = Frame::from_normal(v3(In::Nsx, In::Nsy, In::Nsz));
+            let wo_l = frame.to_local(v3(In::Wox, In::Woy, In::Woz));
             let lam = Lambert {
                 kd: [x(In::KdR), x(In::KdG), x(In::KdB)],
             };

@@ -241,8 +241,6 @@ impl<const N: usize> PathState<N> {
         } else {
             (hit.ng, hit.ns)
         };
-        let frame = Frame::from_normal(ns);
-        let wo_l = frame.to_local(wo);
 
         s.set_dimension(DIMS_CAMERA + (segments - 1) * DIMS_PER_BOUNCE);
         let u_sel = s.next_1d();
@@ -262,15 +260,15 @@ impl<const N: usize> PathState<N> {
                     if let Some(ls) = scene.lights.sample_position(u_area, u_light) {
                         if !ls.directional {
                             let (p, kd) = (hit.p, lam.kd);
-                            lanes.push(
-                                path, p, ng, &frame, wo_l, kd, &sel, u_bsdf, u_rr, &ls, &beta,
-                            );
+                            lanes.push(path, p, ng, ns, wo, kd, &sel, u_bsdf, u_rr, &ls, &beta);
                             return;
                         }
                     }
                 }
             }
         }
+        let frame = Frame::from_normal(ns);
+        let wo_l = frame.to_local(wo);
 
         // Next-event estimation (its shadow ray is answered by `resolve`).
         if !bsdf.is_delta() {
