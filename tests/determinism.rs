@@ -151,10 +151,20 @@ fn bit_identical_for_every_simd_path() {
 #[test]
 fn bit_identical_batched_or_not() {
     use kalos::accel::Isa;
-    let mut scene = kalos::scene::load("cornell-glossy").unwrap();
-    for max_depth in [-1, 6] {
+    use kalos::integrator::rr::RrMode;
+    // Diffuse and glossy walls; the furnished room (4,226 triangles, its own lights); with
+    // roulette, and without.
+    for (name, max_depth, rr) in [
+        ("cornell-glossy", -1, RrMode::Classic),
+        ("cornell-glossy", 6, RrMode::Classic),
+        ("cornell-glossy", 6, RrMode::Off),
+        ("room", 5, RrMode::Off),
+    ] {
+        let mut scene = kalos::scene::load(name).unwrap();
         let mut set = settings(&scene, 24, 20);
         set.integrator.max_depth = max_depth;
+        set.integrator.roulette.mode = rr;
+        let case = format!("{name}, max_depth {max_depth}, rr {rr:?}");
         let mut images = Vec::new();
         for isa in Isa::available() {
             assert!(scene.bvh.set_isa(isa));
@@ -198,11 +208,11 @@ fn bit_identical_batched_or_not() {
         for (what, img) in &images[1..] {
             assert!(
                 *img == images[0].1,
-                "max_depth {max_depth}: {what} gives another image than {}",
+                "{case}: {what} gives another image than {}",
                 images[0].0
             );
         }
-        assert!(images[0].1.iter().any(|p| p[0] > 0.0));
+        assert!(images[0].1.iter().any(|p| p[0] > 0.0), "{case}: black");
     }
 }
 
