@@ -14,7 +14,7 @@
 //! flags instead of early returns, so a path's numbers are the same bit for bit whichever
 //! way it goes.
 
-use super::path::{continued, facing, ToPoint, BATCH_PATHS};
+use super::path::{continued, facing, ToPoint, BATCH_PATHS, SHADOW_T_MAX};
 use super::rr::Selection;
 use crate::material::{Bsdf, Lambert};
 use crate::math::{Frame, Ray, Vec3};
@@ -291,7 +291,7 @@ impl<const N: usize> Lanes<N> {
             beta.0[b] = self.beta_next[b][i];
         }
         (
-            self.has_shadow[i].then(|| (ray(0), 1.0 - 1e-4, e)),
+            self.has_shadow[i].then(|| (ray(0), SHADOW_T_MAX, e)),
             // Lambertian samples are never Dirac.
             self.goes_on[i].then(|| (ray(6), beta, o(12), false)),
         )

@@ -25,6 +25,8 @@ use crate::scene::{Scene, SurfaceHit};
 use crate::spectrum::Spectrum;
 
 pub const DIMS_CAMERA: u32 = 2;
+/// t_max of a shadow ray toward a light point at `o + d` (the point itself not counted).
+pub const SHADOW_T_MAX: f32 = 1.0 - 1e-4;
 pub const DIMS_PER_BOUNCE: u32 = 8;
 
 /// Radiance arriving along `ray` (one sample).
@@ -481,7 +483,7 @@ impl ToPoint {
         let pdf_light = self.pdf_area * self.dist2 / self.cos_l;
         let w = power_heuristic(pdf_light, pdf_bsdf);
         let e = *beta * f * Spectrum::from_rgb(le) * (w / pdf_light);
-        (Ray::new(o, to), 1.0 - 1e-4, e)
+        (Ray::new(o, to), SHADOW_T_MAX, e)
     }
 }
 
@@ -583,7 +585,7 @@ fn next_event_distant<const N: usize>(
             let o = offset_origin(p, ng, wi);
             c.rays += 1;
             let e = *beta * f * Spectrum::from_rgb(pl.intensity) * (1.0 / (dist2 * pmf));
-            Some((Ray::new(o, pl.p - o), 1.0 - 1e-4, e))
+            Some((Ray::new(o, pl.p - o), SHADOW_T_MAX, e))
         }
         Chosen::Env(pmf) => {
             let env = scene.lights.env()?;
