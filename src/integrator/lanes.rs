@@ -14,9 +14,9 @@
 //! flags instead of early returns, so a path's numbers are the same bit for bit whichever
 //! way it goes.
 
-use super::path::{continued, facing, ToPoint, BATCH_PATHS, SHADOW_T_MAX};
+use super::path::{continued, ToPoint, BATCH_PATHS, SHADOW_T_MAX};
 use super::rr::Selection;
-use crate::material::{Bsdf, Lambert};
+use crate::material::Lambert;
 use crate::math::{Frame, Ray, Vec3};
 use crate::spectrum::Spectrum;
 
@@ -110,17 +110,14 @@ impl<const N: usize> Default for Lanes<N> {
 }
 
 impl<const N: usize> Lanes<N> {
-    /// Whether a vertex can end here, before its light is sampled: in RGB (spectral
-    /// bands' uplift reads tables that the loop does not vectorise: 0.65x measured with 8
-    /// bands), `bsdf` Lambertian, sampled by mixture selection without the estimate
+    /// Whether a Lambertian vertex can end here, before its light is sampled: in RGB
+    /// (spectral bands' uplift reads tables that the loop does not vectorise: 0.65x
+    /// measured with 8 bands), sampled by mixture selection without the estimate
     /// roulette's term. Its light point must then be of constant radiance
     /// (`!LightSample::directional`).
     #[inline(always)]
-    pub fn takes(bsdf: &Bsdf, sel: &Selection, estimate: bool) -> bool {
-        N == 3
-            && matches!(bsdf, Bsdf::Diffuse(_))
-            && sel.is_mixture()
-            && !(estimate && sel.s_total < 1.0)
+    pub fn takes(sel: &Selection, estimate: bool) -> bool {
+        N == 3 && sel.is_mixture() && !(estimate && sel.s_total < 1.0)
     }
 
     /// Adds a vertex of path `path` (see [`Self::takes`]).
@@ -250,13 +247,13 @@ impl<const N: usize> Lanes<N> {
             let to = ToPoint::new(p, &frame, light);
             let f = lam.eval::<N>(wo_l, to.wi_l) * to.wi_l.z.abs();
             let (sr, _, e) = to.estimate(p, ng, f, lam.pdf(wo_l, to.wi_l), le, &beta);
-            let has_shadow = to.cos_l > 0.0 && facing(false, to.wi, to.wi_l, ng) && !f.is_black();
+            let has_shadow = to.reaches(ng, false) && !f.is_black();
             // The continuation, as `Selection::sample` (its mixture) with `Lambert::sample`,
             // then `path::continuation`.
             let (rr_on, scale) = sel.roulette(x(In::URr));
             let bs = lam.sample_any::<N>(glam::Vec2::new(x(In::U0), x(In::U1)));
             let (ok, nr, nb) = continued(p, ng, &frame, &bs, scale, &beta);
-            let goes_on = rr_on && wo_l.z > 0.0 && bs.wi.z > 0.0 && ok;
+            let goes_on = rr_on && Lambert::takes_sample(wo_l, &bs) && ok;
             let pdf = bs.pdf;
             self.has_shadow[i] = has_shadow;
             self.goes_on[i] = goes_on;

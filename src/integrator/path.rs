@@ -255,9 +255,11 @@ impl<const N: usize> PathState<N> {
         let rr = &set.roulette;
         let sel = rr.select::<N>(segments - 1, &beta, &bsdf);
 
-        // A diffuse vertex under the BSDF's own sampling ends in the batch's SIMD lanes.
+        // A diffuse vertex under the BSDF's own sampling ends in the batch's SIMD lanes
+        // (one whose light point has an emission table draws it again in `next_event`:
+        // the same point, from the same numbers).
         if let (Some((lanes, path)), Bsdf::Diffuse(lam)) = (lanes, &bsdf) {
-            if Lanes::<N>::takes(&bsdf, &sel, rr.mode.uses_estimate()) {
+            if Lanes::<N>::takes(&sel, rr.mode.uses_estimate()) {
                 if let Some(Chosen::Area(u_area)) = scene.lights.choose(u_sel) {
                     if let Some(ls) = scene.lights.sample_position(u_area, u_light) {
                         if !ls.directional {
@@ -424,7 +426,7 @@ pub fn toward_point<const N: usize>(
     beta: &Spectrum<N>,
 ) -> Option<(Ray, f32, Spectrum<N>)> {
     let to = ToPoint::new(p, frame, light);
-    if !(to.cos_l > 0.0 && facing(transmits, to.wi, to.wi_l, ng)) {
+    if !to.reaches(ng, transmits) {
         return None;
     }
     let f = f(to.wi_l) * to.wi_l.z.abs();
@@ -463,6 +465,14 @@ impl ToPoint {
             lp,
             pdf_area,
         }
+    }
+
+    /// Whether light from the point may arrive here: the point faces the vertex, and wi
+    /// is on the side of the geometric and the shading normal alike (or below both, for
+    /// a BSDF that `transmits`).
+    #[inline(always)]
+    pub fn reaches(&self, ng: Vec3, transmits: bool) -> bool {
+        self.cos_l > 0.0 && facing(transmits, self.wi, self.wi_l, ng)
     }
 
     /// The shadow ray, its t_max, and beta f Le w / p_light, given f |cos| and the
@@ -532,7 +542,7 @@ pub fn continued<const N: usize>(
 /// May light arrive from `wi` (world; `wi_l` in the shading frame)? On the side of the
 /// geometric and the shading normal alike, and on the front unless the BSDF transmits.
 #[inline(always)]
-pub fn facing(
+fn facing(
     transmits: bool,
     wi: crate::math::Vec3,
     wi_l: crate::math::Vec3,

@@ -37,7 +37,13 @@ impl Lambert {
     #[inline(always)]
     pub fn sample<const N: usize>(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample<N>> {
         let s = self.sample_any(u);
-        (wo.z > 0.0 && s.wi.z > 0.0).then_some(s)
+        Self::takes_sample(wo, &s).then_some(s)
+    }
+    /// Whether [`Self::sample`] keeps `s` from [`Self::sample_any`]: wo above the
+    /// surface, wi strictly above.
+    #[inline(always)]
+    pub fn takes_sample<const N: usize>(wo: Vec3, s: &BsdfSample<N>) -> bool {
+        wo.z > 0.0 && s.wi.z > 0.0
     }
     /// [`Self::sample`] before its checks (wo above the surface, wi strictly above).
     #[inline(always)]
