@@ -14,7 +14,8 @@
 //!
 //! Traversal: one ray at a time, the 8 boxes of a node per slab test (one
 //! AVX2 test, or two 4-wide glam `Vec4` ones: SSE2 on x86-64, NEON on
-//! aarch64) and 4 triangles per SIMD triangle test, no
+//! aarch64) and 4 triangles per SIMD triangle test (a leaf's two packets in one
+//! AVX2 test: room 1.015x, Cornell box 1.012x, stop 33), no
 //! heap allocation, a fixed-size uninitialised stack sized from the tree at
 //! build time, and children visited nearest-first for closest-hit queries.
 //! The slab test reads each axis' near and far planes by the ray's octant
@@ -381,6 +382,88 @@ impl Tri4 {
         let t = t * inv;
         let ok = t.cmpgt(Vec4::ZERO) & t.cmplt(Vec4::splat(t_max));
         (ok.bitmask() & m, t, u * inv, v * inv)
+    }
+
+    /// [`Self::intersect`] of two packets (`pair[0]` in lanes 0..4, `pair[1]` in 4..8)
+    /// in one AVX2 test of eight lanes, operation for operation the same; the first
+    /// `count` lanes are valid.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    unsafe fn intersect_pair_avx2(
+        pair: &[Tri4],
+        r: &RayData,
+        t_max: f32,
+        count: u32,
+    ) -> (u32, [f32; 8], [f32; 8], [f32; 8]) {
+        use std::arch::x86_64::*;
+        let (a, b) = (&pair[0], &pair[1]);
+        let both = |x: &Vec4, y: &Vec4| _mm256_set_m128((*y).into(), (*x).into());
+        let row = |x: &[Vec4; 3], y: &[Vec4; 3]| {
+            [both(&x[0], &y[0]), both(&x[1], &y[1]), both(&x[2], &y[2])]
+        };
+        let [v0x, v0y, v0z] = row(&a.v0, &b.v0);
+        let [e1x, e1y, e1z] = row(&a.e1, &b.e1);
+        let [e2x, e2y, e2z] = row(&a.e2, &b.e2);
+        let w = |v: &Vec4| both(v, v);
+        let (ox, oy, oz) = (w(&r.ox), w(&r.oy), w(&r.oz));
+        let (dx, dy, dz) = (w(&r.dx), w(&r.dy), w(&r.dz));
+        let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
+        // p = d × e2
+        let px = sub(mul(dy, e2z), mul(e2y, dz));
+        let py = sub(mul(dz, e2x), mul(e2z, dx));
+        let pz = sub(mul(dx, e2y), mul(e2x, dy));
+        let det = add(add(mul(e1x, px), mul(e1y, py)), mul(e1z, pz));
+        let sign = _mm256_and_ps(det, _mm256_set1_ps(f32::from_bits(SIGN)));
+        let flip = |x: __m256| _mm256_xor_ps(x, sign);
+        let abs_det = _mm256_andnot_ps(_mm256_set1_ps(f32::from_bits(SIGN)), det);
+        let sx = sub(ox, v0x);
+        let sy = sub(oy, v0y);
+        let sz = sub(oz, v0z);
+        let u = flip(add(add(mul(sx, px), mul(sy, py)), mul(sz, pz)));
+        // q = s × e1
+        let qx = sub(mul(sy, e1z), mul(e1y, sz));
+        let qy = sub(mul(sz, e1x), mul(e1z, sx));
+        let qz = sub(mul(sx, e1y), mul(e1x, sy));
+        let v = flip(add(add(mul(dx, qx), mul(dy, qy)), mul(dz, qz)));
+        let t = flip(add(add(mul(e2x, qx), mul(e2y, qy)), mul(e2z, qz)));
+        let zero = _mm256_setzero_ps();
+        let tm = _mm256_set1_ps(t_max);
+        let ok = _mm256_and_ps(
+            _mm256_and_ps(
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero),
+                    _mm256_cmp_ps::<_CMP_GE_OS>(u, zero),
+                ),
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GE_OS>(v, zero),
+                    _mm256_cmp_ps::<_CMP_LE_OS>(add(u, v), abs_det),
+                ),
+            ),
+            _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GT_OS>(t, zero),
+                _mm256_cmp_ps::<_CMP_LT_OS>(t, mul(abs_det, tm)),
+            ),
+        );
+        let m = _mm256_movemask_ps(ok) as u32 & ((1u32 << count) - 1);
+        let mut out = (0, [0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
+        if m == 0 {
+            return out;
+        }
+        let inv = _mm256_div_ps(_mm256_set1_ps(1.0), abs_det);
+        let t = mul(t, inv);
+        let ok = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GT_OS>(t, zero),
+            _mm256_cmp_ps::<_CMP_LT_OS>(t, tm),
+        );
+        out.0 = _mm256_movemask_ps(ok) as u32 & m;
+        // SAFETY: each array holds eight floats.
+        unsafe {
+            _mm256_storeu_ps(out.1.as_mut_ptr(), t);
+            _mm256_storeu_ps(out.2.as_mut_ptr(), mul(u, inv));
+            _mm256_storeu_ps(out.3.as_mut_ptr(), mul(v, inv));
+        }
+        out
     }
 }
 
@@ -983,36 +1066,24 @@ impl Bvh {
             }
         } else {
             let (p, count) = leaf_packets(cur);
-            let mut k = 0;
-            loop {
-                let valid = lane_mask(count - 4 * k as u32);
-                let (mut m, t, u, v) = self.tris[p + k].intersect(&q.r, q.t_best, valid);
-                if m != 0 {
-                    if q.any {
-                        q.best.0 = 0;
-                        return true;
-                    }
-                    let t = t.to_array();
-                    let mut lane = m.trailing_zeros() as usize;
+            let (mut m, t, u, v) = self.leaf_hits::<AVX>(p, count, &q.r, q.t_best);
+            if m != 0 {
+                if q.any {
+                    q.best.0 = 0;
+                    return true;
+                }
+                // The nearest hit; on a tie the earlier lane (and packet).
+                let mut lane = m.trailing_zeros() as usize;
+                m &= m - 1;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    while m != 0 {
-                        let i = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        if t[i] < t[lane] {
-                            lane = i;
-                        }
+                    if t[i] < t[lane] {
+                        lane = i;
                     }
-                    q.t_best = t[lane];
-                    q.best = (
-                        (4 * (p + k) + lane) as u32,
-                        u.to_array()[lane],
-                        v.to_array()[lane],
-                    );
                 }
-                k += 1;
-                if 4 * k as u32 >= count {
-                    break;
-                }
+                q.t_best = t[lane];
+                q.best = ((4 * p + lane) as u32, u[lane], v[lane]);
             }
         }
         // Pop the next node that may still hold a closer hit.
@@ -1026,6 +1097,40 @@ impl Bvh {
                 return false;
             }
         }
+    }
+
+    /// The hits of a leaf's `count` triangles (packets `p ..`) within `(0, t_max)`: a mask
+    /// over eight lanes (lane 4k + j is packet k's lane j) and their `t, b1, b2` (read
+    /// only where the mask is set). A leaf of two packets tests both against the same
+    /// `t_max`: in one AVX2 test when `AVX`, else in two SSE ones, the same operations
+    /// lane by lane, so both agree bit for bit.
+    #[inline(always)]
+    fn leaf_hits<const AVX: bool>(
+        &self,
+        p: usize,
+        count: u32,
+        r: &RayData,
+        t_max: f32,
+    ) -> (u32, [f32; 8], [f32; 8], [f32; 8]) {
+        #[cfg(target_arch = "x86_64")]
+        if AVX && count > 4 {
+            // SAFETY: `AVX` is only instantiated by the `*_avx2` queries, which run only
+            // where the CPU has AVX2 and FMA; a leaf of more than four triangles has two
+            // packets.
+            return unsafe { Tri4::intersect_pair_avx2(&self.tris[p..p + 2], r, t_max, count) };
+        }
+        let mut out = (0, [0.0; 8], [0.0; 8], [0.0; 8]);
+        for k in 0..count.div_ceil(4) as usize {
+            let (m, t, u, v) =
+                self.tris[p + k].intersect(r, t_max, lane_mask(count - 4 * k as u32));
+            if m != 0 {
+                out.0 |= m << (4 * k);
+                out.1[4 * k..4 * k + 4].copy_from_slice(&t.to_array());
+                out.2[4 * k..4 * k + 4].copy_from_slice(&u.to_array());
+                out.3[4 * k..4 * k + 4].copy_from_slice(&v.to_array());
+            }
+        }
+        out
     }
 
     /// Answers many queries at once: the answers of [`Bvh::intersect`] and
