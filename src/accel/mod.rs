@@ -1156,38 +1156,50 @@ impl Bvh {
         }
         let il = self.interleaves();
         for (q, a) in queries.chunks(BATCH).zip(answers.chunks_mut(BATCH)) {
-            match (self.isa, il) {
-                // SAFETY: as in `intersect`.
-                #[cfg(target_arch = "x86_64")]
-                (Isa::Avx2, true) => unsafe { self.trace_avx2::<true>(q, a) },
-                #[cfg(target_arch = "x86_64")]
-                (Isa::Avx2, false) => unsafe { self.trace_avx2::<false>(q, a) },
-                (_, true) => self.trace_base::<true>(q, a),
-                (_, false) => self.trace_base::<false>(q, a),
-            }
+            self.trace_sized(q, a, il);
+        }
+    }
+
+    /// The queries with the smallest traversal stack the tree allows; each stack size is
+    /// a function of its own, so that a small tree's call does not reserve (and probe,
+    /// page by page) the frame of a large one: 64 queries' large stacks are 229 KiB.
+    #[inline(always)]
+    fn trace_sized(&self, q: &[RayQuery], a: &mut [RayAnswer], il: bool) {
+        match (il, self.stack_needed) {
+            (true, n) if n <= TINY_STACK => self.trace_n::<TINY_STACK, true>(q, a),
+            (true, n) if n <= SMALL_STACK => self.trace_n::<SMALL_STACK, true>(q, a),
+            (true, _) => self.trace_n::<LARGE_STACK, true>(q, a),
+            (false, n) if n <= TINY_STACK => self.trace_n::<TINY_STACK, false>(q, a),
+            (false, n) if n <= SMALL_STACK => self.trace_n::<SMALL_STACK, false>(q, a),
+            (false, _) => self.trace_n::<LARGE_STACK, false>(q, a),
+        }
+    }
+
+    /// [`Self::trace_impl`] with stack size `N`, on this BVH's instruction set.
+    #[inline(always)]
+    fn trace_n<const N: usize, const IL: bool>(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
+        match self.isa {
+            // SAFETY: as in `intersect`.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { self.trace_avx2::<N, IL>(q, a) },
+            _ => self.trace_base::<N, IL>(q, a),
         }
     }
 
     #[inline(never)]
-    fn trace_base<const IL: bool>(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
-        self.trace_sized::<false, IL>(q, a)
+    fn trace_base<const N: usize, const IL: bool>(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
+        self.trace_impl::<N, false, IL>(q, a)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn trace_avx2<const IL: bool>(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
-        self.trace_sized::<true, IL>(q, a)
-    }
-
-    #[inline(always)]
-    fn trace_sized<const AVX: bool, const IL: bool>(&self, q: &[RayQuery], a: &mut [RayAnswer]) {
-        if self.stack_needed <= TINY_STACK {
-            self.trace_impl::<TINY_STACK, AVX, IL>(q, a)
-        } else if self.stack_needed <= SMALL_STACK {
-            self.trace_impl::<SMALL_STACK, AVX, IL>(q, a)
-        } else {
-            self.trace_impl::<LARGE_STACK, AVX, IL>(q, a)
-        }
+    #[inline(never)]
+    unsafe fn trace_avx2<const N: usize, const IL: bool>(
+        &self,
+        q: &[RayQuery],
+        a: &mut [RayAnswer],
+    ) {
+        self.trace_impl::<N, true, IL>(q, a)
     }
 
     /// Up to [`BATCH`] queries, their states set up first, then stepped round-robin
