@@ -327,17 +327,7 @@ fn coincident_centroids_and_deep_distributions() {
     assert_eq!(hit.t, 1.0);
     // Geometrically spaced triangles: the SAH would peel one off at a time;
     // the depth limit must keep the tree shallow enough for the stack.
-    let deep: Vec<[Vec3; 3]> = (0..3000)
-        .map(|i| {
-            let x = 1.001f32.powi(i * 4) - 1.0;
-            let s = 1e-3 * (1.0 + x);
-            [
-                Vec3::new(x, 0.0, 0.0),
-                Vec3::new(x + s, 0.0, 0.0),
-                Vec3::new(x, s, 0.0),
-            ]
-        })
-        .collect();
+    let deep = geometric_strip(3000);
     check_against_brute(&deep, 1000, 7);
     // Nested triangles of geometrically growing size.
     let nested: Vec<[Vec3; 3]> = (0..3000)
@@ -441,17 +431,50 @@ fn is_send_sync() {
     assert_send_sync::<Hit>();
 }
 
+/// `n` triangles along the x axis whose sizes and gaps grow geometrically: a deep tree.
+fn geometric_strip(n: i32) -> Vec<[Vec3; 3]> {
+    (0..n)
+        .map(|i| {
+            let x = 1.001f32.powi(i * 4) - 1.0;
+            let s = 1e-3 * (1.0 + x);
+            [
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + s, 0.0, 0.0),
+                Vec3::new(x, s, 0.0),
+            ]
+        })
+        .collect()
+}
+
 #[test]
 fn interleaved_queries_answer_as_single_ones_bit_for_bit() {
     // `Bvh::trace` against `intersect` / `occluded`, on every instruction set, with
-    // closest-hit and any-hit queries mixed in one batch and batches of every length.
+    // closest-hit and any-hit queries mixed in one batch and batches of every length,
+    // interleaved and one after another, with every traversal stack size (each is a
+    // function of its own in `trace`).
     let mut rng = Rng::new(23);
-    for n in [1, 300, 40_000] {
-        let tris = soup(&mut rng, n, true);
+    let mut stacks = [false; 3];
+    for n in [1, 300, 40_000, 0] {
+        // n = 0: the geometric strip, whose tree needs the large stack, with rays aimed
+        // at its triangles (random rays would rarely meet them).
+        let (tris, rays): (_, Vec<(Ray, f32)>) = if n > 0 {
+            let tris = soup(&mut rng, n, true);
+            (tris, (0..5_000).map(|_| random_ray(&mut rng)).collect())
+        } else {
+            let tris = geometric_strip(3000);
+            let rays = (0..5_000)
+                .map(|i| {
+                    let [v0, v1, v2] = tris[i * 7 % tris.len()];
+                    let c = (v0 + v1 + v2) / 3.0 + (v1 - v0) * rng.range(-0.5, 0.5);
+                    let d = Vec3::new(rng.range(-0.1, 0.1), rng.range(-0.1, 0.1), -1.0);
+                    (Ray::new(c + Vec3::Z, d), f32::INFINITY)
+                })
+                .collect();
+            (tris, rays)
+        };
         let mut bvh = Bvh::build(&tris);
-        // Interleaved even on these small trees (larger ones interleave by themselves).
-        bvh.set_interleaving(Some(true));
-        let rays: Vec<(Ray, f32)> = (0..5_000).map(|_| random_ray(&mut rng)).collect();
+        let size = bvh.stack_needed;
+        stacks[(size > TINY_STACK) as usize + (size > SMALL_STACK) as usize] = true;
         let queries: Vec<RayQuery> = rays
             .iter()
             .enumerate()
@@ -467,8 +490,13 @@ fn interleaved_queries_answer_as_single_ones_bit_for_bit() {
             RayAnswer::Closest(h) => (h.map(|h| hit_bits(&h)), false),
             RayAnswer::Occluded(o) => (None, o),
         };
-        for isa in Isa::available() {
+        for (isa, il) in Isa::available()
+            .into_iter()
+            .flat_map(|i| [(i, true), (i, false)])
+        {
             assert!(bvh.set_isa(isa));
+            // Interleaved even on small trees, and one after another even on large ones.
+            bvh.set_interleaving(Some(il));
             let single: Vec<_> = queries
                 .iter()
                 .map(|q| match *q {
@@ -476,7 +504,7 @@ fn interleaved_queries_answer_as_single_ones_bit_for_bit() {
                     RayQuery::Occluded(r, t) => key(&RayAnswer::Occluded(bvh.occluded(&r, t))),
                 })
                 .collect();
-            if n > 1 {
+            if n != 1 {
                 assert!(single.iter().filter(|k| k.0.is_some()).count() > 500);
                 assert!(single.iter().filter(|k| k.1).count() > 100);
             }
@@ -492,11 +520,12 @@ fn interleaved_queries_answer_as_single_ones_bit_for_bit() {
             let batched: Vec<_> = answers.iter().map(key).collect();
             assert!(
                 batched == single,
-                "{}: trace differs from single queries",
+                "{} (interleaved: {il}): trace differs from single queries",
                 isa.name()
             );
         }
     }
+    assert_eq!(stacks, [true; 3], "every stack size tried");
 }
 
 /// The copy onto huge pages keeps every element, on arrays above and below its 4 MiB
