@@ -6,7 +6,8 @@
 //! [`render`] with a [`RenderJob`].
 // Unsafe code is denied everywhere but `accel`, whose run-time dispatched SIMD traversal
 // must call `#[target_feature]` functions (after checking the CPU) and keeps its stack
-// uninitialised, and the one `#[target_feature]` call of `integrator::lanes`.
+// uninitialised, the one `#[target_feature]` call of `integrator::lanes`, and the
+// time-stamp counter's read in `integrator::phases` (cargo feature `phase-timers`).
 #![deny(unsafe_code)]
 
 pub use render::{render, render_scene, RenderJob, Rendered};

@@ -222,6 +222,9 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
             a.output.display()
         );
     }
+    if let Some(phases) = crate::integrator::phases::report() {
+        eprintln!("kalos: {phases}");
+    }
     Ok(())
 }
 

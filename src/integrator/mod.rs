@@ -12,6 +12,7 @@ pub mod bdpt;
 pub mod gather;
 pub mod lanes;
 pub mod path;
+pub mod phases;
 pub mod rr;
 pub mod visible;
 

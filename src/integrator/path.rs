@@ -15,6 +15,7 @@
 //! point lights are Dirac, reached by next-event estimation alone.
 
 use super::lanes::Lanes;
+use super::phases::{Phase, Timer};
 use super::rr::{LTilde, Step};
 use super::{Counters, IntegratorSettings};
 use crate::light::Chosen;
@@ -81,6 +82,7 @@ pub fn radiance_batch<const N: usize>(
     let mut ans = [RayAnswer::Occluded(false); 2 * BATCH_PATHS];
     // (Only RGB paths end in lanes: see `Lanes::takes`.)
     let mut lanes = (N == 3).then(Lanes::<N>::default);
+    let mut timer = Timer::start();
     loop {
         let mut k = 0;
         for p in &st[..n] {
@@ -94,10 +96,12 @@ pub fn radiance_batch<const N: usize>(
                 k += 1;
             }
         }
+        timer.lap(Phase::Gather);
         if k == 0 {
             break;
         }
         scene.bvh.trace(&qs[..k], &mut ans[..k]);
+        timer.lap(Phase::Trace);
         // The hits' triangle data is asked for before the paths read it, where the scene
         // is too large for the caches (as the BVH, `Bvh::interleaves`). On smaller scenes
         // it is in the caches already and the loop only costs time: without it the Cornell
@@ -129,9 +133,11 @@ pub fn radiance_batch<const N: usize>(
                 p.advance(scene, &ray, hit, s, set, l_tilde, c, lane);
             }
         }
+        timer.lap(Phase::Advance);
         // The diffuse vertices handed to the lanes end together.
         if let Some(lanes) = lanes.as_mut().filter(|l| l.k > 0) {
             lanes.finish(scene.bvh.isa());
+            timer.lap(Phase::Lanes);
             for i in 0..lanes.k {
                 let (shadow, next) = lanes.ending(i);
                 let p = &mut st[lanes.path[i] as usize];
@@ -140,8 +146,10 @@ pub fn radiance_batch<const N: usize>(
                 p.continue_with(next);
             }
             lanes.k = 0;
+            timer.lap(Phase::Ending);
         }
     }
+    timer.finish();
     for (o, p) in out.iter_mut().zip(st[..n].iter_mut()) {
         // A last estimate term (the path ended with no shadow ray) is still to add.
         p.resolve(false);
