@@ -52,7 +52,7 @@ pub const MAX_THREADS_PER_CPU: usize = 4;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, clap::Args)]
 #[serde(default, deny_unknown_fields)]
 pub struct RenderJob {
-    /// Built-in scene name (see `kalos scenes`), .obj or .toml file (the CLI's positional
+    /// Built-in scene name (see `kalos scenes`), .obj, .toml or Mitsuba .xml file (the CLI's positional
     /// argument).
     #[arg(skip)]
     pub scene: String,

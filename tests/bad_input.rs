@@ -321,18 +321,23 @@ fn bad_options_give_one_line_errors_naming_the_option() {
 fn a_scene_without_emitters_warns_and_renders_black() {
     let d = temp_dir("dark");
     let scene = write(&d, "dark.obj", format!("{TRI}f 1 2 3\n"));
-    let (code, err) = render(&d, &scene, &["--quiet"]);
-    // --quiet hides warnings; render again without it
-    assert_eq!(code, 0, "{err}");
-    let (code, err) = render(&d, &scene, &[]);
-    assert_eq!(code, 0, "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    let warnings: Vec<&str> = err
-        .lines()
-        .filter(|l| l.starts_with("kalos: warning:"))
-        .collect();
-    assert_eq!(warnings.len(), 1, "{err}");
-    assert!(warnings[0].contains("no emitter"), "{err}");
+    // --quiet hides the progress and the summary, never a warning
+    for quiet in [&["--quiet"][..], &[]] {
+        let (code, err) = render(&d, &scene, quiet);
+        assert_eq!(code, 0, "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+        let warnings: Vec<&str> = err
+            .lines()
+            .filter(|l| l.starts_with("kalos: warning:"))
+            .collect();
+        assert_eq!(warnings.len(), 1, "{quiet:?}: {err}");
+        assert!(warnings[0].contains("no emitter"), "{err}");
+        assert_eq!(
+            err.lines().count(),
+            if quiet.is_empty() { 2 } else { 1 },
+            "{err}"
+        );
+    }
     let img = kalos::image_io::read_image(&d.join("out.exr")).unwrap();
     assert_eq!((img.width, img.height), (8, 8));
     assert!(img.data.iter().all(|p| *p == [0.0; 3]), "not black");

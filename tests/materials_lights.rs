@@ -12,8 +12,8 @@ use kalos::material::Distribution;
 use kalos::math::Vec3;
 use kalos::pipeline::Silent;
 use kalos::scene::{
-    builtin::push_sphere, CameraDesc, EnvironmentDesc, MaterialDesc, PointLightDesc, Scene,
-    SceneDesc, SurfaceModel,
+    builtin::push_sphere, CameraDesc, EnvironmentDesc, FovAxis, MaterialDesc, PointLightDesc,
+    Scene, SceneDesc, SurfaceModel,
 };
 
 fn camera() -> CameraDesc {
@@ -22,6 +22,7 @@ fn camera() -> CameraDesc {
         target: [0.0, 0.0, 0.0],
         up: [0.0, 1.0, 0.0],
         fov: 30.0,
+        fov_axis: FovAxis::Y,
     }
 }
 
@@ -291,6 +292,7 @@ fn point_light_over_a_diffuse_plane() {
             target: [0.0, 0.0, 0.0],
             up: [0.0, 1.0, 0.0],
             fov: 2.0,
+            fov_axis: FovAxis::Y,
         }),
         point_lights: vec![PointLightDesc {
             position: Vec3::new(0.0, 0.0, 1.0),

@@ -151,7 +151,8 @@ def scenes() -> Dict[str, str]:
 
 
 def load(scene: Union[str, os.PathLike]) -> Scene:
-    """Load a scene: a built-in name (see ``scenes()``), an .obj or a .toml file.
+    """Load a scene: a built-in name (see ``scenes()``), an .obj, a .toml or a
+    Mitsuba .xml file.
 
     Raises FileNotFoundError for a missing file, ValueError for a name that is neither a
     built-in scene nor a scene file, and ``kalos.SceneError`` (with the loader's one-line

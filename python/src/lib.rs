@@ -160,23 +160,13 @@ impl NativeScene {
 /// file, ValueError for a name that is neither, SceneError for a file kalos cannot read.
 #[pyfunction]
 fn load(py: Python<'_>, spec: &str) -> PyResult<NativeScene> {
-    if !kalos::scene::builtin::NAMES.contains(&spec) {
-        let p = Path::new(spec);
-        let ext = p
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase());
-        if !matches!(ext.as_deref(), Some("obj") | Some("toml")) {
-            return Err(PyValueError::new_err(format!(
-                "{spec}: not a built-in scene ({}) nor an .obj or .toml file",
-                kalos::scene::builtin::NAMES.join(", ")
-            )));
-        }
-        if !p.exists() {
-            return Err(PyFileNotFoundError::new_err(format!(
-                "{spec}: no such file"
-            )));
-        }
+    if !kalos::scene::is_scene_spec(spec) {
+        return Err(PyValueError::new_err(kalos::scene::not_a_scene(spec)));
+    }
+    if !kalos::scene::builtin::NAMES.contains(&spec) && !Path::new(spec).exists() {
+        return Err(PyFileNotFoundError::new_err(format!(
+            "{spec}: no such file"
+        )));
     }
     let s = spec.to_string();
     let scene = py

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import kalos
-from conftest import cli_error
+from conftest import ROOT, cli_error
 
 # Small jobs: the point is equality, not the picture.
 JOBS = [
@@ -146,6 +146,8 @@ def test_scene_errors(tmp_path, cli):
     # neither a built-in name nor a scene file
     with pytest.raises(ValueError, match="not a built-in scene"):
         kalos.load("cornel")
+    with pytest.raises(ValueError, match=r"nor an \.obj, \.toml or Mitsuba \.xml file"):
+        kalos.load(tmp_path / "mesh.ply")
     # a broken file: SceneError with the CLI's file:line message
     bad = tmp_path / "bad.obj"
     bad.write_text("v 0 0 0\nv 1 0 0\nf 1 2 7\n")
@@ -153,6 +155,15 @@ def test_scene_errors(tmp_path, cli):
         kalos.load(bad)
     assert str(e.value) == cli_error(cli("render", bad, "-q", "--spp", "1", check=False))
     assert "bad.obj:3" in str(e.value)
+
+
+def test_mitsuba_xml_loads_as_in_the_cli(cli):
+    xml = ROOT / "scenes" / "mitsuba" / "cornell-box.xml"
+    info = kalos.load(xml).info()
+    cli_info = json.loads(cli("info", xml, "--json").stdout)
+    for k in ("name", "triangles", "materials", "emitters", "bounds_min", "bounds_max"):
+        assert info[k] == cli_info[k], k
+    assert info["emitters"] > 0
 
 
 def test_scenes_info_write_compare(tmp_path, cli):

@@ -19,7 +19,7 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 #[allow(clippy::large_enum_variant)] // parsed once per process
 pub enum Command {
-    /// Render a scene (built-in name, .obj or .toml) to an image.
+    /// Render a scene (built-in name, .obj, .toml or Mitsuba .xml) to an image.
     Render(render::RenderArgs),
     /// List the built-in scenes.
     Scenes,
@@ -65,7 +65,7 @@ pub enum Command {
     Filter(filter::FilterCommand),
     /// Print triangles, materials, emitters, bounds and load/BVH times of a scene.
     Info {
-        /// Built-in scene name, .obj or .toml file.
+        /// Built-in scene name, .obj, .toml or Mitsuba .xml file.
         scene: String,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -169,7 +169,16 @@ pub fn run(cli: Cli) -> Result<(), String> {
                     i.bounds_max[2]
                 );
                 if let Some(c) = &i.camera {
-                    println!("camera       --camera {} ({})", c.to_arg(), i.camera_from);
+                    // a Mitsuba sensor's fov along x (or another axis) given vertically
+                    // at the scene's resolution, as --camera takes it
+                    let (w, h) = s.defaults.res.unwrap_or(crate::render::DEFAULT_RES);
+                    let at = if c.fov_axis == crate::scene::FovAxis::Y {
+                        String::new()
+                    } else {
+                        format!("; its field of view vertical at {w}x{h}")
+                    };
+                    let arg = c.vertical(w, h).to_arg();
+                    println!("camera       --camera {arg} ({}{at})", i.camera_from);
                 }
                 println!("load         {:.3} s", i.load_seconds);
                 let (nodes8, leaves, packets) = s.bvh.shape();

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct RadiosityArgs {
-    /// Built-in scene name, .obj or .toml file.
+    /// Built-in scene name, .obj, .toml or Mitsuba .xml file.
     pub scene: String,
     /// The meshed solution (.ply, vertex colours: MeshLab, Blender).
     #[arg(short, long)]
@@ -23,7 +23,7 @@ pub struct RadiosityArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = crate::options::parse_threads)]
     pub threads: Option<usize>,
-    /// No progress bar and no summary.
+    /// No progress bar and no summary (warnings and errors still print).
     #[arg(short, long)]
     pub quiet: bool,
 }
@@ -55,7 +55,7 @@ pub fn run(a: RadiosityArgs) -> Result<(), String> {
         eprintln!("kalos: warning: {w}");
     }
     let (pool, warning) = crate::render::thread_pool(a.threads)?;
-    if let (Some(w), false) = (warning, a.quiet) {
+    if let Some(w) = warning {
         eprintln!("kalos: warning: {w}");
     }
     super::progress::install_interrupt_handler();

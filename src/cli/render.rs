@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Built-in scene name (see `kalos scenes`), .obj or .toml file.
+    /// Built-in scene name (see `kalos scenes`), .obj, .toml or Mitsuba .xml file.
     pub scene: String,
     #[command(flatten)]
     pub job: RenderJob,
@@ -27,7 +27,7 @@ pub struct RenderArgs {
     /// Write render statistics as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
-    /// No progress bar or summary.
+    /// No progress bar or summary (warnings and errors still print).
     #[arg(short, long)]
     pub quiet: bool,
     /// DTF: write the intermediate images beside the output (dependent, independent,
@@ -144,11 +144,8 @@ fn same_file(a: &Path, b: &Path) -> bool {
 
 /// `kalos render`: check the outputs, render, write the image, layers and statistics.
 pub fn run(a: RenderArgs) -> Result<(), String> {
-    let say = |w: &str| {
-        if !a.quiet {
-            eprintln!("kalos: warning: {w}")
-        }
-    };
+    // warnings print under --quiet too: a scene's dropped feature must never go unsaid
+    let say = |w: &str| eprintln!("kalos: warning: {w}");
     for w in check_outputs(&a)? {
         say(&w);
     }

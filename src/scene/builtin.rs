@@ -14,7 +14,7 @@
 //!   combined BRDFs of the roulette paper's lobe-selection comparison).
 
 use super::obj::{load_obj_text, MtlSource};
-use super::{CameraDesc, MaterialDesc, RenderDefaults, SceneDesc};
+use super::{CameraDesc, FovAxis, MaterialDesc, RenderDefaults, SceneDesc};
 use glam::{Mat4, Vec3};
 
 pub const NAMES: &[&str] = &[
@@ -79,6 +79,7 @@ fn room() -> Result<SceneDesc, String> {
         target: [1.2, 0.9, 0.9],
         up: [0.0, 1.0, 0.0],
         fov: 60.0,
+        fov_axis: FovAxis::Y,
     });
     d.defaults = RenderDefaults {
         res: Some((600, 600)),
@@ -98,6 +99,7 @@ pub fn cornell_camera() -> CameraDesc {
         target: [0.0; 3],
         up: [0.0, 1.0, 0.0],
         fov: 39.3077,
+        fov_axis: FovAxis::Y,
     }
 }
 
@@ -257,6 +259,7 @@ fn furnace_room(name: &str) -> SceneDesc {
         target: [-0.5, 0.3, -1.0],
         up: [0.0, 1.0, 0.0],
         fov: 70.0,
+        fov_axis: FovAxis::Y,
     });
     d.defaults = RenderDefaults {
         res: Some((64, 64)),
@@ -357,6 +360,7 @@ fn caustic() -> SceneDesc {
         target: [0.0, -0.4, -0.05],
         up: [0.0, 1.0, 0.0],
         fov: 70.0,
+        fov_axis: FovAxis::Y,
     });
     d.defaults = RenderDefaults {
         res: Some((256, 256)),
@@ -509,6 +513,7 @@ fn rw_room() -> SceneDesc {
         target: [-0.1, 0.9, -1.0],
         up: [0.0, 1.0, 0.0],
         fov: 62.0,
+        fov_axis: FovAxis::Y,
     });
     d.defaults = RenderDefaults {
         res: Some((256, 256)),

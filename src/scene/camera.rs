@@ -18,8 +18,41 @@ pub struct CameraDesc {
     pub origin: [f32; 3],
     pub target: [f32; 3],
     pub up: [f32; 3],
-    /// Vertical field of view in degrees.
+    /// Field of view in degrees, along `fov_axis` of the film.
     pub fov: f32,
+    /// The film extent `fov` spans (vertical unless a Mitsuba sensor's `fov_axis` says
+    /// otherwise): resolved against the resolution the render runs at, so that `--res`
+    /// keeps a Mitsuba scene's horizontal field of view as Mitsuba's `-D resx=..` does.
+    #[serde(default)]
+    pub fov_axis: FovAxis,
+}
+
+/// Which extent of the film a field of view spans (Mitsuba's `fov_axis`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FovAxis {
+    X,
+    #[default]
+    Y,
+    Diagonal,
+    /// The smaller of width and height.
+    Smaller,
+    /// The larger of width and height.
+    Larger,
+}
+
+impl FovAxis {
+    /// Mitsuba's names: x, y, diagonal, smaller, larger.
+    pub fn parse(s: &str) -> Option<FovAxis> {
+        Some(match s {
+            "x" => FovAxis::X,
+            "y" => FovAxis::Y,
+            "diagonal" => FovAxis::Diagonal,
+            "smaller" => FovAxis::Smaller,
+            "larger" => FovAxis::Larger,
+            _ => return None,
+        })
+    }
 }
 
 impl CameraDesc {
@@ -44,9 +77,34 @@ impl CameraDesc {
             target: [v[3], v[4], v[5]],
             up: [v[6], v[7], v[8]],
             fov: v[9],
+            fov_axis: FovAxis::Y,
         };
         c.validate().map_err(|e| format!("--camera: {e}"))?;
         Ok(c)
+    }
+
+    /// tan of half the vertical field of view on a `width` x `height` film.
+    pub fn tan_half_vertical(&self, width: u32, height: u32) -> f32 {
+        let t = (self.fov.to_radians() * 0.5).tan();
+        let (w, h) = (width.max(1) as f32, height.max(1) as f32);
+        match self.fov_axis {
+            FovAxis::Y => t,
+            FovAxis::X => t * h / w,
+            FovAxis::Diagonal => t * h / w.hypot(h),
+            FovAxis::Smaller if w < h => t * h / w,
+            FovAxis::Larger if w > h => t * h / w,
+            FovAxis::Smaller | FovAxis::Larger => t,
+        }
+    }
+
+    /// The same camera with its field of view given vertically for a `width` x `height`
+    /// film (as `--camera` takes it).
+    pub fn vertical(&self, width: u32, height: u32) -> CameraDesc {
+        CameraDesc {
+            fov: (2.0 * self.tan_half_vertical(width, height).atan()).to_degrees(),
+            fov_axis: FovAxis::Y,
+            ..*self
+        }
     }
 
     pub fn validate(&self) -> Result<(), String> {
@@ -100,7 +158,7 @@ impl Camera {
             forward,
             right,
             up,
-            tan_half: (desc.fov.to_radians() * 0.5).tan(),
+            tan_half: desc.tan_half_vertical(width, height),
             aspect: width as f32 / height as f32,
         }
     }
@@ -228,6 +286,7 @@ pub fn framing_camera(b: &Bounds3) -> CameraDesc {
         target: c.into(),
         up: [0.0, 1.0, 0.0],
         fov,
+        fov_axis: FovAxis::Y,
     }
 }
 
@@ -366,6 +425,7 @@ pub fn default_camera(
         target: (origin + dir).into(),
         up: [0.0, 1.0, 0.0],
         fov: 60.0,
+        fov_axis: FovAxis::Y,
     };
     let name = |d: Vec3| match (d.x, d.z) {
         (x, _) if x > 0.5 => "+x",
@@ -392,7 +452,7 @@ pub fn default_camera(
 }
 
 impl CameraDesc {
-    /// The camera as a `--camera` value.
+    /// The camera as a `--camera` value (its field of view vertical: see [`Self::vertical`]).
     pub fn to_arg(&self) -> String {
         let v = [
             self.origin[0],
@@ -425,6 +485,7 @@ mod tests {
                 target: [-0.1, 0.4, -1.0],
                 up: [0.0, 1.0, 0.0],
                 fov: 60.0,
+                fov_axis: FovAxis::Y,
             },
             w,
             h,

@@ -13,7 +13,7 @@ pub mod toml_scene;
 pub mod tri_attr;
 pub mod xml;
 
-pub use camera::{Camera, CameraDesc};
+pub use camera::{Camera, CameraDesc, FovAxis};
 pub use hit::SurfaceHit;
 pub use texture::Texture;
 
@@ -591,11 +591,29 @@ pub fn load_desc(spec: &str) -> Result<SceneDesc, String> {
         }
         Some("toml") => toml_scene::load(path),
         Some("xml") => xml::load(path),
-        _ => Err(format!(
-            "{spec}: not a built-in scene ({}) nor an .obj, .toml or Mitsuba .xml file",
-            builtin::NAMES.join(", ")
-        )),
+        _ => Err(not_a_scene(spec)),
     }
+}
+
+/// The scene files [`load`] reads, by extension (lower case).
+pub const FILE_EXTENSIONS: [&str; 3] = ["obj", "toml", "xml"];
+
+/// Whether `spec` names a built-in scene or a file of a kind [`load`] reads (not whether
+/// the file exists).
+pub fn is_scene_spec(spec: &str) -> bool {
+    builtin::NAMES.contains(&spec)
+        || Path::new(spec)
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| FILE_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
+}
+
+/// The error for a `spec` that is neither a built-in scene nor a scene file.
+pub fn not_a_scene(spec: &str) -> String {
+    format!(
+        "{spec}: not a built-in scene ({}) nor an .obj, .toml or Mitsuba .xml file",
+        builtin::NAMES.join(", ")
+    )
 }
 
 /// Kd + Ks of a material brought to at most 1 on every band ([`mtl::energy_scale`]; a

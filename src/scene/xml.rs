@@ -29,7 +29,9 @@
 //! parameter that was not read; a plugin name Mitsuba does not know is an error. Files are
 //! read through `input` (regular files, size limit, byte-order mark).
 
-use super::{CameraDesc, EnvironmentDesc, MaterialDesc, PointLightDesc, SceneDesc, SurfaceModel};
+use super::{
+    CameraDesc, EnvironmentDesc, FovAxis, MaterialDesc, PointLightDesc, SceneDesc, SurfaceModel,
+};
 use crate::material::Distribution;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::cell::{Cell, RefCell};
@@ -2224,34 +2226,12 @@ impl<'a> Loader<'a> {
         if !(fov > 0.0 && fov < 180.0) {
             return Err(format!("{}: fov {fov}: must be in (0, 180) degrees", el.at));
         }
-        let (wf, hf) = (w as f32, h as f32);
-        let t = (fov.to_radians() * 0.5).tan();
-        let tv = match axis.as_str() {
-            "x" => t * hf / wf,
-            "y" => t,
-            "diagonal" => t * hf / wf.hypot(hf),
-            "smaller" => {
-                if w < h {
-                    t * hf / wf
-                } else {
-                    t
-                }
-            }
-            "larger" => {
-                if w > h {
-                    t * hf / wf
-                } else {
-                    t
-                }
-            }
-            a => {
-                return Err(format!(
-                    "{}: fov_axis \"{a}\": expected x, y, diagonal, smaller or larger",
-                    el.at
-                ))
-            }
-        };
-        let vfov = (2.0 * tv.atan()).to_degrees();
+        let fov_axis = FovAxis::parse(&axis).ok_or_else(|| {
+            format!(
+                "{}: fov_axis \"{axis}\": expected x, y, diagonal, smaller or larger",
+                el.at
+            )
+        })?;
         let xf = self.transform(el, "to_world")?;
         let origin = xf.transform_point3(Vec3::ZERO);
         let fwd = xf.transform_vector3(Vec3::Z).normalize_or_zero();
@@ -2269,7 +2249,8 @@ impl<'a> Loader<'a> {
             origin: origin.into(),
             target: (origin + fwd).into(),
             up: up.into(),
-            fov: vfov,
+            fov,
+            fov_axis,
         };
         cam.validate()
             .map_err(|e| format!("{}: sensor: {e}", el.at))?;
@@ -2814,11 +2795,35 @@ mod tests {
         assert!((Vec3::from(c.target) - Vec3::new(1.0, 2.0, 2.0)).length() < 1e-6);
         assert!((Vec3::from(c.up) - Vec3::Y).length() < 1e-6);
         // fov_axis x (Mitsuba's default): 90 degrees across 200 pixels, so tan(v/2) = 1/2
+        assert_eq!((c.fov, c.fov_axis), (90.0, FovAxis::X));
+        assert!((c.tan_half_vertical(200, 100) - 0.5).abs() < 1e-6);
+        let v = c.vertical(200, 100);
         assert!(
-            (c.fov - 2.0 * 0.5f32.atan().to_degrees()).abs() < 1e-3,
+            (v.fov - 2.0 * 0.5f32.atan().to_degrees()).abs() < 1e-3,
             "{}",
-            c.fov
+            v.fov
         );
+        // another resolution (--res) keeps the 90 degrees across, as Mitsuba's -D resx/resy
+        assert!((c.tan_half_vertical(100, 300) - 3.0).abs() < 1e-5);
         assert_eq!(d.defaults.res, Some((200, 100)));
+        // the other axes, resolved at the render's resolution
+        let axis = |a: &str| {
+            let d = scene(&format!(
+                r#"<sensor type="perspective"><float name="fov" value="90"/>
+                     <string name="fov_axis" value="{a}"/></sensor><shape type="cube"/>"#
+            ))
+            .unwrap();
+            let c = d.camera.unwrap();
+            [(200, 100), (100, 200)].map(|(w, h)| c.tan_half_vertical(w, h))
+        };
+        let near = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).abs() + (a[1] - b[1]).abs() < 1e-5;
+        assert!(near(axis("y"), [1.0, 1.0]));
+        assert!(near(axis("x"), [0.5, 2.0]));
+        assert!(near(axis("smaller"), [1.0, 2.0]));
+        assert!(near(axis("larger"), [0.5, 1.0]));
+        let d = 5f32.sqrt();
+        assert!(near(axis("diagonal"), [1.0 / d, 2.0 / d]));
+        let e = scene(r#"<sensor type="perspective"><string name="fov_axis" value="z"/></sensor>"#);
+        assert!(e.unwrap_err().contains("fov_axis \"z\""));
     }
 }

@@ -524,7 +524,7 @@ fn unweighted_strategies_converge_to_the_same_image() {
 /// correction matters on every light-subpath vertex on it.
 fn smooth_sphere_room() -> Scene {
     use crate::scene::builtin::{inward_box, push_quad, push_sphere};
-    use crate::scene::{CameraDesc, MaterialDesc, SceneDesc};
+    use crate::scene::{CameraDesc, FovAxis, MaterialDesc, SceneDesc};
     let mut d = SceneDesc {
         name: "smooth-sphere".into(),
         ..Default::default()
@@ -555,6 +555,7 @@ fn smooth_sphere_room() -> Scene {
         target: [0.1, -0.45, -0.3],
         up: [0.0, 1.0, 0.0],
         fov: 35.0,
+        fov_axis: FovAxis::Y,
     });
     Scene::build(d, 0.0).unwrap()
 }
@@ -876,7 +877,7 @@ fn bdpt_efficiency() {
 /// light subpaths carry importance (the radiance scaling undone by `Bsdf::adjoint_scale`).
 fn rough_glass_room() -> Scene {
     use crate::scene::builtin::{inward_box, push_quad, push_sphere};
-    use crate::scene::{CameraDesc, MaterialDesc, SceneDesc, SurfaceModel};
+    use crate::scene::{CameraDesc, FovAxis, MaterialDesc, SceneDesc, SurfaceModel};
     let mut d = SceneDesc {
         name: "rough-glass".into(),
         ..Default::default()
@@ -931,6 +932,7 @@ fn rough_glass_room() -> Scene {
         target: [0.1, -0.5, -0.3],
         up: [0.0, 1.0, 0.0],
         fov: 40.0,
+        fov_axis: FovAxis::Y,
     });
     Scene::build(d, 0.0).unwrap()
 }
