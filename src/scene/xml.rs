@@ -863,7 +863,6 @@ impl<'a> Loader<'a> {
         let Some(p) = self.prop(el, name) else {
             return Ok(None);
         };
-        let v = self.value(p)?;
         match p.tag.as_str() {
             "float" | "integer" => {}
             // a texture or spectrum where a number is expected: its mean
@@ -879,6 +878,7 @@ impl<'a> Loader<'a> {
                 ))
             }
         }
+        let v = self.value(p)?;
         let f: f32 = v.trim().parse().map_err(|_| {
             format!(
                 "{}: <{} name=\"{name}\" value=\"{v}\">: not a number",
@@ -912,7 +912,8 @@ impl<'a> Loader<'a> {
             return Ok(None);
         };
         let v = self.value(p)?;
-        match v.trim() {
+        // Mitsuba lower-cases the value first (Python writes True and False)
+        match v.trim().to_ascii_lowercase().as_str() {
             "true" | "1" => Ok(Some(true)),
             "false" | "0" => Ok(Some(false)),
             _ => Err(format!(
@@ -1055,9 +1056,11 @@ impl<'a> Loader<'a> {
                     if dir == Vec3::ZERO {
                         return Err(format!("{}: <lookat>: origin and target coincide", op.at));
                     }
+                    // no (or a zero) up: Mitsuba's coordinate_system(dir).first, the first
+                    // of Duff et al.'s pair, which glam's any_orthonormal_pair computes
                     let up = match get("up")? {
-                        Some(u) => u,
-                        None => dir.any_orthonormal_vector(),
+                        Some(u) if u != Vec3::ZERO => u,
+                        _ => dir.any_orthonormal_pair().0,
                     };
                     let left = up.cross(dir).normalize_or_zero();
                     if left == Vec3::ZERO {
@@ -1195,7 +1198,12 @@ impl<'a> Loader<'a> {
                     }
                     let mut wl = Vec::new();
                     let mut val = Vec::new();
-                    for pair in v.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+                    // Mitsuba tokenizes on commas and whitespace: "400:0.1, 500:0.5" or
+                    // "400:0.1 500:0.5"
+                    for pair in v
+                        .split(|c: char| c == ',' || c.is_whitespace())
+                        .filter(|s| !s.is_empty())
+                    {
                         let (l, x) = pair
                             .split_once(':')
                             .ok_or_else(|| bad(v, "expected wavelength:value pairs"))?;
@@ -1424,7 +1432,20 @@ impl<'a> Loader<'a> {
         let a = self.float(el, "alpha")?;
         let (u, v) = (self.float(el, "alpha_u")?, self.float(el, "alpha_v")?);
         let alpha = match (a, u, v) {
-            (Some(a), _, _) => a,
+            // Mitsuba refuses both forms at once, and one of alpha_u, alpha_v alone
+            (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
+                return Err(format!(
+                    "{}: {plugin}: give either alpha or alpha_u and alpha_v, not both",
+                    el.at
+                ))
+            }
+            (None, Some(_), None) | (None, None, Some(_)) => {
+                return Err(format!(
+                    "{}: {plugin}: alpha_u and alpha_v must be given together",
+                    el.at
+                ))
+            }
+            (Some(a), None, None) => a,
             (None, Some(u), Some(v)) => {
                 if u != v {
                     self.warn(
@@ -1442,7 +1463,7 @@ impl<'a> Loader<'a> {
         };
         if !(0.0..=10.0).contains(&alpha) {
             return Err(format!(
-                "{}: {plugin} alpha {alpha}: must be in [0, 1]",
+                "{}: {plugin} alpha {alpha}: must be in [0, 10]",
                 el.at
             ));
         }
@@ -1527,13 +1548,26 @@ impl<'a> Loader<'a> {
                 let material = self.string(el, "material")?;
                 let (mut eta, mut k) = match &material {
                     Some(n) => {
-                        let f = METALS.iter().find(|(m, _, _)| m == n).ok_or_else(|| {
+                        let find = |n: &str| METALS.iter().find(|(m, _, _)| *m == n);
+                        // Mitsuba's documented list (and 0.6's files) also name Palik's
+                        // measurements, "Cu_palik", "Ni_palik": the element's data stands in
+                        let palik = n.strip_suffix("_palik").and_then(find);
+                        let f = find(n).or(palik).ok_or_else(|| {
                             format!(
                                 "{}: conductor material \"{n}\": not one of Mitsuba's named conductors ({})",
                                 el.at,
                                 METALS.iter().map(|(m, _, _)| *m).collect::<Vec<_>>().join(", ")
                             )
                         })?;
+                        if find(n).is_none() {
+                            self.warn(
+                                &format!("palik {n}"),
+                                format!(
+                                    "{}: conductor material \"{n}\": rendered with \"{}\" (Palik's tables are not bundled; the two differ by a few percent)",
+                                    el.at, f.0
+                                ),
+                            );
+                        }
                         (f.1, f.2)
                     }
                     None => ([0.0; 3], [1.0; 3]),
@@ -2779,6 +2813,62 @@ mod tests {
         assert!(w.contains("t.xml:4: parameter 'wobble'"), "{w}");
         assert!(w.contains("t.xml:5: unsupported shape 'serialized'"), "{w}");
         assert_eq!(d.warnings.len(), 3, "{w}");
+    }
+
+    /// Forms real files use that Mitsuba reads: a texture as a roughness, spectra split by
+    /// spaces, Python's booleans, Palik's conductor names, a lookat without up.
+    #[test]
+    fn mitsubas_lenient_forms_are_read() {
+        let d = scene(
+            r#"<bsdf type="roughconductor" id="m"><texture type="bitmap" name="alpha">
+                 <string name="filename" value="scenes/mitsuba/textures/floor.png"/></texture>
+                 <string name="material" value="Ni_palik"/></bsdf>
+               <shape type="rectangle"><ref id="m"/></shape>
+               <shape type="rectangle"><bsdf type="diffuse"><spectrum name="reflectance"
+                 value="400:0.5 500:0.5  600:0.5,700:0.5"/></bsdf></shape>
+               <shape type="rectangle"><boolean name="flip_normals" value="True"/>
+                 <bsdf type="diffuse"/></shape>"#,
+        )
+        .unwrap();
+        let m = &d.materials[d.materials.len() - 3];
+        let ni = METALS.iter().find(|(n, _, _)| *n == "Ni").unwrap();
+        match &m.model {
+            Some(SurfaceModel::Conductor { eta, alpha, .. }) => {
+                assert_eq!(*eta, ni.1);
+                // the texture's mean
+                assert!(*alpha > 0.0 && *alpha < 1.0, "{alpha}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let w = d.warnings.join("\n");
+        assert!(w.contains("\"Ni_palik\": rendered with \"Ni\""), "{w}");
+        let kd = d.materials[d.materials.len() - 2].kd;
+        assert!(kd.iter().all(|c| (c - 0.5).abs() < 0.02), "{kd:?}");
+        let e = scene(
+            r#"<shape type="cube"><bsdf type="conductor">
+                 <string name="material" value="Xx_palik"/></bsdf></shape>"#,
+        )
+        .unwrap_err();
+        assert!(e.contains("\"Xx_palik\": not one of"), "{e}");
+        // lookat without up: Mitsuba's coordinate_system(dir).first, +x looking down -z
+        let d = scene(
+            r#"<sensor type="perspective"><transform name="to_world">
+                 <lookat origin="0, 0, 5" target="0, 0, 0"/></transform></sensor>
+               <shape type="cube"/>"#,
+        )
+        .unwrap();
+        assert!((Vec3::from(d.camera.unwrap().up) - Vec3::X).length() < 1e-6);
+        // one of alpha_u, alpha_v alone, or with alpha: refused as Mitsuba does
+        for p in [
+            r#"<float name="alpha_u" value="0.4"/>"#,
+            r#"<float name="alpha" value="0.4"/><float name="alpha_v" value="0.4"/>"#,
+        ] {
+            let e = scene(&format!(
+                r#"<shape type="cube"><bsdf type="roughconductor">{p}</bsdf></shape>"#
+            ))
+            .unwrap_err();
+            assert!(e.contains("t.xml:2: roughconductor: "), "{e}");
+        }
     }
 
     #[test]
