@@ -477,10 +477,11 @@ pub fn render_scene(
     let rej = film.rejected;
     if rej.total() > 0 {
         warnings.push(format!(
-            "rejected {} samples ({} NaN, {} infinite); they are not in the image",
+            "rejected {} samples ({} NaN, {} infinite or above {:e}); they are not in the image",
             rej.total(),
             rej.nan,
-            rej.infinite
+            rej.infinite,
+            crate::film::SAMPLE_MAX
         ));
     }
     // (a scene without emitters has said so when it was loaded)

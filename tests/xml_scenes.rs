@@ -361,3 +361,61 @@ fn info_prints_the_default_camera() {
         "{line}"
     );
 }
+
+/// Mitsuba's BSDFs reflect on the front only: a rectangle turned away from the camera and
+/// the light is black unless its BSDF is wrapped in `twosided`, for the path tracer and
+/// for BDPT; seen from the front, one-sided and two-sided render the same image.
+#[test]
+fn bsdfs_outside_twosided_are_black_on_the_back() {
+    let d = temp_dir("onesided");
+    let xml = |flip: bool, twosided: bool| {
+        let bsdf = if twosided {
+            r#"<bsdf type="twosided"><bsdf type="diffuse"/></bsdf>"#
+        } else {
+            r#"<bsdf type="diffuse"/>"#
+        };
+        format!(
+            r#"<scene version="3.0.0">
+                 <sensor type="perspective"><float name="fov" value="30"/><transform name="to_world">
+                   <lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform></sensor>
+                 <shape type="rectangle"><transform name="to_world"><scale value="0.3"/>
+                   <lookat origin="1.5, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+                   <emitter type="area"><rgb name="radiance" value="40"/></emitter></shape>
+                 <shape type="rectangle"><boolean name="flip_normals" value="{flip}"/>{bsdf}</shape>
+               </scene>"#
+        )
+    };
+    let mut means = Vec::new();
+    for kind in [
+        kalos::integrator::IntegratorKind::Path,
+        kalos::integrator::IntegratorKind::Bdpt,
+    ] {
+        for (flip, twosided) in [(true, false), (true, true), (false, false), (false, true)] {
+            let f = d.join(format!("r-{flip}-{twosided}.xml"));
+            std::fs::write(&f, xml(flip, twosided)).unwrap();
+            let s = scene::load(f.to_str().unwrap()).unwrap();
+            let mut set = settings(&s, 24, 24);
+            set.integrator.kind = kind;
+            // the image's mean with BDPT's light-tracing splats (`Film::value`)
+            let film = render_spp(&s, &set, 16);
+            let n = film.pixels.len();
+            means.push((0..n).map(|i| film.value(i)[0]).sum::<f64>() / n as f64);
+        }
+        let [back1, back2, front1, front2] = means[means.len() - 4..] else {
+            unreachable!()
+        };
+        assert_eq!(back1, 0.0, "{kind:?}: the back of a one-sided diffuse");
+        assert!(back2 > 0.05, "{kind:?}: {back2}");
+        assert!(
+            front1 > 0.05 && front1 == front2,
+            "{kind:?}: {front1} {front2}"
+        );
+        // the same surface from either side when two-sided
+        assert!(
+            (back2 - front2).abs() < 0.05 * front2,
+            "{kind:?}: {back2} {front2}"
+        );
+    }
+    // and the two estimators agree
+    assert!((means[1] - means[5]).abs() < 0.03 * means[1], "{means:?}");
+}

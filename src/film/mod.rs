@@ -24,7 +24,7 @@ pub use file::{
     film_from_bytes, film_to_bytes, merge_files, read_film, write_film, FilmFile, FILM_VERSION,
 };
 pub use splat::{SplatFilm, BATCHES};
-pub use stats::{PixelStats, Rejections};
+pub use stats::{PixelStats, Rejections, SAMPLE_MAX};
 
 /// Bytes of film storage per pixel (statistics plus the output images made from them).
 pub const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelStats>() as u64 + 3 * 4 * 4;

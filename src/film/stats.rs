@@ -124,10 +124,15 @@ impl PixelStats {
     }
 }
 
+/// The largest sample magnitude a pixel takes: the fixed-point sums hold values up to
+/// `TERM_MAX / FIXED` (1.7e16) exactly, and a larger one would be clamped in silence.
+pub const SAMPLE_MAX: f32 = 1e16;
+
 /// Counts of samples that were caught before reaching a pixel.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize, PartialEq, Eq)]
 pub struct Rejections {
     pub nan: u64,
+    /// Infinite, or finite beyond `SAMPLE_MAX`.
     pub infinite: u64,
 }
 
@@ -142,7 +147,8 @@ impl Rejections {
     /// Returns true if the sample may go into a pixel; counts it otherwise.
     #[inline]
     pub fn check(&mut self, v: &[f32; 3]) -> bool {
-        if v.iter().all(|x| x.is_finite()) {
+        // false for NaN too
+        if v.iter().all(|x| x.abs() <= SAMPLE_MAX) {
             return true;
         }
         if v.iter().any(|x| x.is_nan()) {
@@ -157,6 +163,22 @@ impl Rejections {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// NaN, infinite and finite samples beyond what the fixed-point sums hold are counted
+    /// and kept out of the pixel (a 1e20 sample was clamped to 1.7e16 in silence).
+    #[test]
+    fn samples_beyond_the_sums_range_are_rejected() {
+        let mut r = Rejections::default();
+        assert!(r.check(&[SAMPLE_MAX, -SAMPLE_MAX, 0.0]));
+        assert!(!r.check(&[0.0, 1e20, 0.0]));
+        assert!(!r.check(&[f32::INFINITY, 0.0, 0.0]));
+        assert!(!r.check(&[f32::NAN, 1e20, 0.0]));
+        assert_eq!((r.nan, r.infinite), (1, 2));
+        // the largest accepted sample sums exactly
+        let mut p = PixelStats::default();
+        p.push([SAMPLE_MAX; 3]);
+        assert_eq!(p.sum[0], (SAMPLE_MAX as f64 * FIXED) as i128);
+    }
 
     /// The i64 shortcut gives the terms of the i128 conversion it replaced, on both sides
     /// of 2^63, at the cap, for negative values and for NaN.

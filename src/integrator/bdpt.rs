@@ -384,7 +384,7 @@ fn random_walk<const N: usize>(
             break;
         };
         let mat = scene.material_of(hit.prim);
-        let bsdf = scene.bsdf_at(mat, &hit);
+        let bsdf = scene.bsdf_at(mat, &hit, -ray.d);
         let prev = *path.last().unwrap();
         let mut v = Vertex {
             kind: Kind::Surface,

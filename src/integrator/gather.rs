@@ -143,7 +143,7 @@ pub fn radiance<const N: usize>(
             l += (beta + beta_d) * le * w;
         }
 
-        let bsdf = scene.bsdf_at(mat, &hit);
+        let bsdf = scene.bsdf_at(mat, &hit, wo);
 
         // The waiting diffuse part: (B - E)/pi at the first diffuse-like hit.
         if !beta_d.is_black() && !bsdf.is_delta() {
@@ -349,7 +349,7 @@ fn incident<const N: usize>(
             le = e;
             l += thr * le * w;
         }
-        let bsdf = scene.bsdf_at(mat, &hit);
+        let bsdf = scene.bsdf_at(mat, &hit, wo);
         if !bsdf.is_delta() {
             if segments < max_segments {
                 if sol.covers(hit.prim) && has_diffuse(&bsdf) {

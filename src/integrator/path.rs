@@ -252,7 +252,7 @@ impl<const N: usize> PathState<N> {
         }
 
         // The BSDF at the hit, textured, in a frame facing wo for two-sided materials.
-        let bsdf = scene.bsdf_at(mat, &hit);
+        let bsdf = scene.bsdf_at(mat, &hit, wo);
         let (ng, ns) = if bsdf.is_two_sided() && wo.dot(hit.ng) < 0.0 {
             (-hit.ng, -hit.ns)
         } else {

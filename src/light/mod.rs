@@ -313,6 +313,7 @@ mod tests {
             emission: le,
             emission_table: None,
             kd_texture: None,
+            one_sided: false,
         }
     }
 

@@ -15,6 +15,8 @@ pub struct Material {
     /// Directional emission L_e(w) = 1 - a(cos theta), a the directional albedo.
     pub emission_table: Option<Arc<AlbedoTable>>,
     pub kd_texture: Option<u32>,
+    /// Black on the back side (the geometric normal's): see `MaterialDesc::one_sided`.
+    pub one_sided: bool,
 }
 
 impl Material {

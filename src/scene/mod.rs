@@ -48,6 +48,10 @@ pub struct MaterialDesc {
     /// A surface model beyond MTL's vocabulary (Mitsuba's BSDF plugins); None: the MTL
     /// fields above describe the surface. `kd`/`map_kd` stay the diffuse reflectance.
     pub model: Option<SurfaceModel>,
+    /// Reflects on its front side only (counter-clockwise winding) and absorbs on its
+    /// back, as Mitsuba's BSDFs do outside a `twosided`; OBJ and kalos' own scenes are
+    /// two-sided. Dielectrics have two sides of their own and ignore it.
+    pub one_sided: bool,
 }
 
 /// Surface models of Mitsuba 3's BSDF plugins (parameters in RGB; roughness is the alpha of
@@ -146,6 +150,7 @@ impl MaterialDesc {
             source: None,
             notes: Vec::new(),
             model: None,
+            one_sided: false,
         }
     }
 }
@@ -305,6 +310,7 @@ impl Scene {
                 emission,
                 emission_table,
                 kd_texture,
+                one_sided: m.one_sided && bsdf.is_two_sided(),
             });
         }
         let t0 = Instant::now();
@@ -429,9 +435,13 @@ impl Scene {
         &self.materials[self.tri_material[prim as usize] as usize]
     }
 
-    /// The BSDF of material `mat` at a hit: its Kd from its texture at `hit`'s uv.
+    /// The BSDF of material `mat` at a hit seen from direction `wo`: its Kd from its texture
+    /// at `hit`'s uv; black on the back of a one-sided material.
     #[inline]
-    pub fn bsdf_at(&self, mat: &Material, hit: &SurfaceHit) -> crate::material::Bsdf {
+    pub fn bsdf_at(&self, mat: &Material, hit: &SurfaceHit, wo: Vec3) -> crate::material::Bsdf {
+        if mat.one_sided && wo.dot(hit.ng) <= 0.0 {
+            return crate::material::Bsdf::Black;
+        }
         match mat.kd_texture {
             Some(t) => mat
                 .bsdf

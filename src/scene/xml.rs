@@ -1715,6 +1715,9 @@ impl<'a> Loader<'a> {
                 if el.attr("id").is_some() {
                     inner_m.name = name;
                 }
+                if kind == "twosided" {
+                    inner_m.one_sided = false;
+                }
                 self.unused(el, &format!("bsdf '{kind}'"));
                 return Ok(inner_m);
             }
@@ -1764,6 +1767,9 @@ impl<'a> Loader<'a> {
                 );
             }
         }
+        // Mitsuba's BSDFs reflect on the front only, unless wrapped in `twosided` (above);
+        // a thin slab is symmetric
+        m.one_sided = !matches!(kind, "thindielectric" | "null");
         self.unused(el, &format!("bsdf '{kind}'"));
         Ok(m)
     }
@@ -1786,9 +1792,10 @@ impl<'a> Loader<'a> {
         if let Some(i) = self.default_material {
             return i;
         }
-        self.desc
-            .materials
-            .push(MaterialDesc::named("mitsuba-default-diffuse"));
+        // Mitsuba's default: a one-sided diffuse of reflectance 0.5
+        let mut m = MaterialDesc::named("mitsuba-default-diffuse");
+        m.one_sided = true;
+        self.desc.materials.push(m);
         let i = self.desc.materials.len() as u32 - 1;
         self.default_material = Some(i);
         i
