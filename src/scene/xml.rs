@@ -2327,16 +2327,14 @@ impl<'a> Loader<'a> {
                 let rr_depth = self.int(el, "rr_depth")?.unwrap_or(5);
                 self.desc.defaults.rr_min_depth =
                     Some(rr_depth.saturating_sub(1).clamp(0, u32::MAX as i64) as u32);
-                if let Some(p) = self.prop(el, "hide_emitters") {
-                    if p.attr("value") == Some("true") {
-                        self.warn(
-                            "hide_emitters",
-                            format!(
-                                "{}: hide_emitters is not supported: emitters are visible",
-                                p.at
-                            ),
-                        );
-                    }
+                if self.boolean(el, "hide_emitters")? == Some(true) {
+                    self.warn(
+                        "hide_emitters",
+                        format!(
+                            "{}: hide_emitters is not supported: emitters are visible",
+                            el.at
+                        ),
+                    );
                 }
                 self.unused(el, &format!("integrator '{kind}'"));
             }
@@ -2350,6 +2348,20 @@ impl<'a> Loader<'a> {
                         el.at
                     ),
                 );
+            }
+            // Mitsuba's AOV integrator: the radiance is its nested integrator's
+            "aov" => {
+                self.mark_all(el);
+                self.warn(
+                    "integrator aov",
+                    format!(
+                        "{}: integrator 'aov': kalos renders the radiance of the nested integrator, without the AOVs (see --aovs)",
+                        el.at
+                    ),
+                );
+                for c in el.children.iter().filter(|c| c.tag == "integrator") {
+                    self.integrator(c)?;
+                }
             }
             k => {
                 self.mark_all(el);
@@ -2865,6 +2877,16 @@ mod tests {
         )
         .unwrap();
         assert!((Vec3::from(d.camera.unwrap().up) - Vec3::X).length() < 1e-6);
+        // an aov integrator's radiance is its nested integrator's, with its max_depth
+        let d = scene(
+            r#"<integrator type="aov"><string name="aovs" value="nn:sh_normal"/>
+                 <integrator type="path" name="radiance"><integer name="max_depth" value="2"/>
+                 <boolean name="hide_emitters" value="False"/></integrator></integrator>
+               <shape type="cube"/>"#,
+        )
+        .unwrap();
+        assert_eq!(d.defaults.max_depth, Some(2));
+        assert!(d.warnings.iter().any(|w| w.contains("integrator 'aov'")));
         // one of alpha_u, alpha_v alone, or with alpha: refused as Mitsuba does
         for p in [
             r#"<float name="alpha_u" value="0.4"/>"#,
