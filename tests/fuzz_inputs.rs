@@ -487,7 +487,7 @@ fn mutate_xml(text: &str, rng: &mut Rng) -> String {
 
 #[test]
 fn mutated_mitsuba_xml_never_panics() {
-    use kalos::scene::xml;
+    use kalos::scene::mitsuba as xml;
     let dir = Path::new("/nonexistent-kalos-dir");
     let d = xml::parse(XML, "fuzz.xml", dir).unwrap();
     assert!(d.warnings.is_empty(), "{:?}", d.warnings);

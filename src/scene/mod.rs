@@ -5,13 +5,13 @@
 pub mod builtin;
 pub mod camera;
 pub mod hit;
+pub mod mitsuba;
 pub mod mtl;
 pub mod obj;
 pub mod ply;
 pub mod texture;
 pub mod toml_scene;
 pub mod tri_attr;
-pub mod xml;
 
 pub use camera::{Camera, CameraDesc, FovAxis};
 pub use hit::SurfaceHit;
@@ -600,7 +600,7 @@ pub fn load_desc(spec: &str) -> Result<SceneDesc, String> {
             Ok(desc)
         }
         Some("toml") => toml_scene::load(path),
-        Some("xml") => xml::load(path),
+        Some("xml") => mitsuba::load(path),
         _ => Err(not_a_scene(spec)),
     }
 }

@@ -122,7 +122,7 @@ enum ModelSection {
 /// Mitsuba's default roughness.
 const DEFAULT_ALPHA: f32 = 0.1;
 /// The distribution of a rough model that names none (GGX, kalos' first one; Mitsuba's
-/// XML default is Beckmann, which `xml.rs` keeps).
+/// XML default is Beckmann, which the Mitsuba reader keeps).
 const DEFAULT_DISTRIBUTION: Distribution = Distribution::Ggx;
 
 impl ModelSection {

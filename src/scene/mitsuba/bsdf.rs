@@ -1,0 +1,453 @@
+//! Mitsuba's BSDF plugins as kalos materials (`MaterialDesc` with a `SurfaceModel`).
+
+use super::*;
+
+/// Unpolarised Fresnel reflectance of a conductor at normal incidence.
+pub(super) fn conductor_r0(eta: f32, k: f32) -> f32 {
+    ((eta - 1.0).powi(2) + k * k) / ((eta + 1.0).powi(2) + k * k)
+}
+
+/// Unpolarised Fresnel reflectance of a dielectric interface (relative index `eta`,
+/// light arriving from the outside at cosine `c`).
+pub(super) fn fresnel_dielectric(c: f32, eta: f32) -> f32 {
+    let s2 = (1.0 - c * c).max(0.0) / (eta * eta);
+    if s2 >= 1.0 {
+        return 1.0;
+    }
+    let ct = (1.0 - s2).sqrt();
+    let rs = (c - eta * ct) / (c + eta * ct);
+    let rp = (eta * c - ct) / (eta * c + ct);
+    0.5 * (rs * rs + rp * rp)
+}
+
+/// Hemispherical (cosine-weighted) Fresnel reflectance, from the side of index ratio eta.
+pub(super) fn fresnel_diffuse(eta: f32) -> f32 {
+    let n = 256;
+    (0..n)
+        .map(|i| {
+            let c = (i as f32 + 0.5) / n as f32;
+            2.0 * c * fresnel_dielectric(c, eta) / n as f32
+        })
+        .sum()
+}
+
+/// A normalized-Phong exponent with about the spread of a GGX lobe of roughness alpha.
+pub(super) fn phong_exponent(alpha: f32) -> f32 {
+    (2.0 / (alpha * alpha).max(1e-4) - 2.0).clamp(1.0, 10000.0)
+}
+
+impl<'a> Loader<'a> {
+    pub(super) fn ior(&self, el: &'a El, name: &str, default: &str) -> R<f32> {
+        let Some(p) = self.prop(el, name) else {
+            return Ok(IORS.iter().find(|(n, _)| *n == default).unwrap().1);
+        };
+        let v = self.value(p)?;
+        if p.tag == "string" {
+            return IORS
+                .iter()
+                .find(|(n, _)| n.eq_ignore_ascii_case(v.trim()))
+                .map(|(_, x)| *x)
+                .ok_or_else(|| {
+                    format!(
+                        "{}: {name} \"{v}\": not a number nor one of Mitsuba's named indices ({})",
+                        p.at,
+                        IORS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+                    )
+                });
+        }
+        let x: f32 = v
+            .trim()
+            .parse()
+            .ok()
+            .filter(|x: &f32| x.is_finite() && *x > 0.0)
+            .ok_or_else(|| format!("{}: {name} \"{v}\": not a positive number", p.at))?;
+        Ok(x)
+    }
+
+    /// Roughness and microfacet distribution of a rough plugin (alpha, or alpha_u / alpha_v:
+    /// their geometric mean; `distribution` Beckmann unless it says ggx, as in Mitsuba).
+    pub(super) fn alpha(&self, el: &'a El, plugin: &str) -> R<(f32, Distribution)> {
+        let dist = match self.string(el, "distribution")? {
+            None => Distribution::Beckmann,
+            Some(d) => Distribution::from_name(d.trim()).ok_or_else(|| {
+                format!(
+                    "{}: {plugin} distribution \"{d}\": must be \"beckmann\" or \"ggx\"",
+                    el.at
+                )
+            })?,
+        };
+        // Mitsuba's switch between visible-normal and plain D sampling: the same image
+        // (kalos always samples visible normals)
+        let _ = self.boolean(el, "sample_visible")?;
+        let a = self.float(el, "alpha")?;
+        let (u, v) = (self.float(el, "alpha_u")?, self.float(el, "alpha_v")?);
+        let alpha = match (a, u, v) {
+            // Mitsuba refuses both forms at once, and one of alpha_u, alpha_v alone
+            (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
+                return Err(format!(
+                    "{}: {plugin}: give either alpha or alpha_u and alpha_v, not both",
+                    el.at
+                ))
+            }
+            (None, Some(_), None) | (None, None, Some(_)) => {
+                return Err(format!(
+                    "{}: {plugin}: alpha_u and alpha_v must be given together",
+                    el.at
+                ))
+            }
+            (Some(a), None, None) => a,
+            (None, Some(u), Some(v)) => {
+                if u != v {
+                    self.warn(
+                        "anisotropic",
+                        format!(
+                            "{}: anisotropic roughness (alpha_u {u}, alpha_v {v}): rendered isotropic with alpha {}",
+                            el.at,
+                            (u * v).sqrt()
+                        ),
+                    );
+                }
+                (u * v).sqrt()
+            }
+            _ => 0.1,
+        };
+        if !(0.0..=10.0).contains(&alpha) {
+            return Err(format!(
+                "{}: {plugin} alpha {alpha}: must be in [0, 10]",
+                el.at
+            ));
+        }
+        Ok((alpha.max(1e-4), dist))
+    }
+
+    /// Set `kd`/`map_kd` from a diffuse reflectance.
+    pub(super) fn set_diffuse(&self, m: &mut MaterialDesc, c: Option<Color>, default: f32) {
+        match c {
+            None => m.kd = [default; 3],
+            Some(Color::Rgb(v)) => m.kd = v,
+            Some(Color::Bitmap(p)) => {
+                m.kd = [1.0; 3];
+                m.map_kd = Some(p);
+            }
+        }
+    }
+
+    /// A BSDF element (inline or referenced) as a material description.
+    pub(super) fn bsdf(&self, el: &'a El) -> R<MaterialDesc> {
+        let el = self.resolve(el)?;
+        if el.tag != "bsdf" {
+            return Err(format!(
+                "{}: <{}> where a <bsdf> was expected",
+                el.at, el.tag
+            ));
+        }
+        let kind = el.kind();
+        if !known_plugin("bsdf", kind) {
+            return Err(format!("{}: unknown bsdf plugin '{kind}'", el.at));
+        }
+        let name = el
+            .attr("id")
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("{kind}@{}", el.at.rsplit(':').next().unwrap_or("")));
+        let mut m = MaterialDesc::named(&name);
+        m.source = Some(el.at.clone());
+        let nested = || -> R<Option<&'a El>> {
+            let mut it = el.children.iter().filter(|c| {
+                c.tag == "bsdf"
+                    || (c.tag == "ref" && self.resolve(c).map(|r| r.tag == "bsdf").unwrap_or(false))
+            });
+            let first = it.next();
+            if let Some(f) = first {
+                f.used.set(true);
+            }
+            for extra in it {
+                extra.used.set(true);
+                if kind == "twosided" {
+                    self.warn(
+                        "twosided two bsdfs",
+                        format!(
+                            "{}: twosided with a different bsdf per side: kalos renders the first on both sides",
+                            extra.at
+                        ),
+                    );
+                }
+            }
+            Ok(first)
+        };
+        match kind {
+            "diffuse" | "roughdiffuse" => {
+                let c = self.color(el, "reflectance", Use::Reflectance)?;
+                self.set_diffuse(&mut m, c, 0.5);
+                if kind == "roughdiffuse" {
+                    self.mark_all(el);
+                    self.warn(
+                        "bsdf roughdiffuse",
+                        format!(
+                            "{}: roughdiffuse (Oren-Nayar) is rendered as Lambertian diffuse",
+                            el.at
+                        ),
+                    );
+                }
+            }
+            "conductor" | "roughconductor" => {
+                let (alpha, distribution) = if kind == "roughconductor" {
+                    self.alpha(el, kind)?
+                } else {
+                    (0.0, Distribution::default())
+                };
+                let material = self.string(el, "material")?;
+                let (mut eta, mut k) = match &material {
+                    Some(n) => {
+                        let find = |n: &str| METALS.iter().find(|(m, _, _)| *m == n);
+                        // Mitsuba's documented list (and 0.6's files) also name Palik's
+                        // measurements, "Cu_palik", "Ni_palik": the element's data stands in
+                        let palik = n.strip_suffix("_palik").and_then(find);
+                        let f = find(n).or(palik).ok_or_else(|| {
+                            format!(
+                                "{}: conductor material \"{n}\": not one of Mitsuba's named conductors ({})",
+                                el.at,
+                                METALS.iter().map(|(m, _, _)| *m).collect::<Vec<_>>().join(", ")
+                            )
+                        })?;
+                        if find(n).is_none() {
+                            self.warn(
+                                &format!("palik {n}"),
+                                format!(
+                                    "{}: conductor material \"{n}\": rendered with \"{}\" (Palik's tables are not bundled; the two differ by a few percent)",
+                                    el.at, f.0
+                                ),
+                            );
+                        }
+                        (f.1, f.2)
+                    }
+                    None => ([0.0; 3], [1.0; 3]),
+                };
+                if let Some(e) = self.constant(el, "eta", Use::Unbounded, kind)? {
+                    eta = e;
+                }
+                if let Some(x) = self.constant(el, "k", Use::Unbounded, kind)? {
+                    k = x;
+                }
+                let specular = self
+                    .constant(el, "specular_reflectance", Use::Reflectance, kind)?
+                    .unwrap_or([1.0; 3]);
+                let r0: [f32; 3] = [0, 1, 2].map(|i| conductor_r0(eta[i], k[i]) * specular[i]);
+                m.kd = [0.0; 3];
+                m.ks = r0;
+                if alpha == 0.0 {
+                    m.illum = 5;
+                } else {
+                    m.illum = 2;
+                    m.ns = phong_exponent(alpha);
+                }
+                m.model = Some(SurfaceModel::Conductor {
+                    eta,
+                    k,
+                    specular,
+                    alpha: if kind == "conductor" { 0.0 } else { alpha },
+                    distribution,
+                });
+            }
+            "plastic" | "roughplastic" => {
+                let (alpha, distribution) = if kind == "roughplastic" {
+                    self.alpha(el, kind)?
+                } else {
+                    (0.0, Distribution::default())
+                };
+                let eta =
+                    self.ior(el, "int_ior", "polypropylene")? / self.ior(el, "ext_ior", "air")?;
+                let c = self.color(el, "diffuse_reflectance", Use::Reflectance)?;
+                self.set_diffuse(&mut m, c, 0.5);
+                let specular = self
+                    .constant(el, "specular_reflectance", Use::Reflectance, kind)?
+                    .unwrap_or([1.0; 3]);
+                let nonlinear = self.boolean(el, "nonlinear")?.unwrap_or(false);
+                // Mitsuba's diffuse term: R (1 - F_i)(1 - F_o) / (eta^2 (1 - {R or 1} Fdr_int))
+                let f0 = fresnel_dielectric(1.0, eta);
+                let fdr_int = fresnel_diffuse(1.0 / eta);
+                let t = (1.0 - f0) * (1.0 - f0) / (eta * eta);
+                let scale = |r: f32| {
+                    let d = 1.0 - if nonlinear { r } else { 1.0 } * fdr_int;
+                    if d > 0.0 {
+                        t / d
+                    } else {
+                        1.0
+                    }
+                };
+                if m.map_kd.is_none() {
+                    m.kd = m.kd.map(|r| r * scale(r));
+                }
+                m.ks = specular.map(|s| s * f0);
+                m.ns = if alpha == 0.0 {
+                    10000.0
+                } else {
+                    phong_exponent(alpha)
+                };
+                m.model = Some(SurfaceModel::Plastic {
+                    eta,
+                    specular,
+                    alpha: if kind == "plastic" { 0.0 } else { alpha },
+                    distribution,
+                    nonlinear,
+                });
+            }
+            "dielectric" | "roughdielectric" | "thindielectric" => {
+                let (alpha, distribution) = if kind == "roughdielectric" {
+                    self.alpha(el, kind)?
+                } else {
+                    (0.0, Distribution::default())
+                };
+                let eta = self.ior(el, "int_ior", "bk7")? / self.ior(el, "ext_ior", "air")?;
+                for k in ["specular_reflectance", "specular_transmittance"] {
+                    if let Some(c) = self.constant(el, k, Use::Reflectance, kind)? {
+                        if c != [1.0; 3] {
+                            self.warn(
+                                &format!("{kind} {k}"),
+                                format!(
+                                    "{}: {kind} {k} other than 1 is not supported: rendered as 1",
+                                    el.at
+                                ),
+                            );
+                        }
+                    }
+                }
+                m.kd = [0.0; 3];
+                m.illum = 7;
+                if kind == "thindielectric" {
+                    // no refraction of the direction: an index of 1 (see-through) is closest
+                    m.ni = 1.0;
+                    m.model = Some(SurfaceModel::ThinDielectric { eta });
+                } else {
+                    m.ni = eta;
+                    m.model = Some(SurfaceModel::Dielectric {
+                        eta,
+                        alpha,
+                        distribution,
+                    });
+                }
+            }
+            "phong" => {
+                let c = self.color(el, "diffuse_reflectance", Use::Reflectance)?;
+                self.set_diffuse(&mut m, c, 0.5);
+                m.ks = self
+                    .constant(el, "specular_reflectance", Use::Reflectance, kind)?
+                    .unwrap_or([0.2; 3]);
+                m.ns = self.float(el, "exponent")?.unwrap_or(30.0);
+            }
+            "twosided" | "mask" | "bumpmap" | "normalmap" => {
+                let inner =
+                    nested()?.ok_or_else(|| format!("{}: {kind} needs a nested <bsdf>", el.at))?;
+                let mut inner_m = self.bsdf(inner)?;
+                match kind {
+                    "mask" => {
+                        let op = self.prop(el, "opacity");
+                        self.mark_all(el);
+                        self.warn(
+                            "bsdf mask",
+                            format!(
+                                "{}: mask (opacity{}) is not supported: rendered opaque",
+                                el.at,
+                                op.and_then(|o| o.attr("value"))
+                                    .map(|v| format!(" {v}"))
+                                    .unwrap_or_default()
+                            ),
+                        );
+                    }
+                    "bumpmap" | "normalmap" => {
+                        self.mark_all(el);
+                        self.warn(
+                            &format!("bsdf {kind}"),
+                            format!("{}: {kind} is not supported: rendered without it", el.at),
+                        );
+                    }
+                    _ => {}
+                }
+                if el.attr("id").is_some() {
+                    inner_m.name = name;
+                }
+                if kind == "twosided" {
+                    inner_m.one_sided = false;
+                }
+                self.unused(el, &format!("bsdf '{kind}'"));
+                return Ok(inner_m);
+            }
+            "blendbsdf" | "mixturebsdf" => {
+                let inner = nested()?;
+                self.mark_all(el);
+                self.warn(
+                    &format!("bsdf {kind}"),
+                    format!(
+                        "{}: {kind} is not supported: rendered as its first bsdf",
+                        el.at
+                    ),
+                );
+                if let Some(i) = inner {
+                    let mut im = self.bsdf(i)?;
+                    if el.attr("id").is_some() {
+                        im.name = name;
+                    }
+                    return Ok(im);
+                }
+            }
+            "principled" | "principledthin" => {
+                let c = self.color(el, "base_color", Use::Reflectance)?;
+                self.set_diffuse(&mut m, c, 0.5);
+                self.mark_all(el);
+                self.warn(
+                    &format!("bsdf {kind}"),
+                    format!(
+                        "{}: unsupported bsdf '{kind}': rendered as diffuse base_color",
+                        el.at
+                    ),
+                );
+            }
+            "null" => {
+                m.kd = [0.0; 3];
+                m.notes
+                    .push("null bsdf: kalos renders it black (it should let light through)".into());
+            }
+            k => {
+                self.mark_all(el);
+                self.warn(
+                    &format!("bsdf {k}"),
+                    format!(
+                        "{}: unsupported bsdf '{k}': rendered as diffuse grey (0.5)",
+                        el.at
+                    ),
+                );
+            }
+        }
+        // Mitsuba's BSDFs reflect on the front only, unless wrapped in `twosided` (above);
+        // a thin slab is symmetric
+        m.one_sided = !matches!(kind, "thindielectric" | "null");
+        self.unused(el, &format!("bsdf '{kind}'"));
+        Ok(m)
+    }
+
+    /// The material index of a BSDF element (a referenced one is built once).
+    pub(super) fn material(&mut self, el: &'a El) -> R<u32> {
+        let target = self.resolve(el)?;
+        let key = target as *const El;
+        if let Some(&i) = self.materials.get(&key) {
+            return Ok(i);
+        }
+        let m = self.bsdf(target)?;
+        self.desc.materials.push(m);
+        let i = self.desc.materials.len() as u32 - 1;
+        self.materials.insert(key, i);
+        Ok(i)
+    }
+
+    pub(super) fn default_material(&mut self) -> u32 {
+        if let Some(i) = self.default_material {
+            return i;
+        }
+        // Mitsuba's default: a one-sided diffuse of reflectance 0.5
+        let mut m = MaterialDesc::named("mitsuba-default-diffuse");
+        m.one_sided = true;
+        self.desc.materials.push(m);
+        let i = self.desc.materials.len() as u32 - 1;
+        self.default_material = Some(i);
+        i
+    }
+}

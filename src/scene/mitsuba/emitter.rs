@@ -1,0 +1,111 @@
+//! Mitsuba's emitters: area (on a shape), point, constant and envmap.
+
+use super::*;
+
+impl<'a> Loader<'a> {
+    pub(super) fn emitter(&mut self, el: &'a El) -> R<()> {
+        let kind = el.kind();
+        if !known_plugin("emitter", kind) {
+            return Err(format!("{}: unknown emitter plugin '{kind}'", el.at));
+        }
+        match kind {
+            "point" => {
+                let xf = self.transform(el, "to_world")?;
+                let p = self
+                    .point(el, "position")?
+                    .unwrap_or_else(|| xf.transform_point3(Vec3::ZERO));
+                let intensity = self
+                    .constant(el, "intensity", Use::Unbounded, "point emitter")?
+                    .unwrap_or_else(|| spectrum_to_rgb(&[360.0, 830.0], &[1.0, 1.0], false));
+                self.desc.point_lights.push(PointLightDesc {
+                    position: p,
+                    intensity,
+                    source: Some(el.at.clone()),
+                });
+            }
+            "constant" | "envmap" => {
+                let xf = self.transform(el, "to_world")?;
+                let (radiance, map) = if kind == "constant" {
+                    let r = self
+                        .constant(el, "radiance", Use::Unbounded, "constant emitter")?
+                        .unwrap_or_else(|| spectrum_to_rgb(&[360.0, 830.0], &[1.0, 1.0], false));
+                    (r, None)
+                } else {
+                    let f = self
+                        .string(el, "filename")?
+                        .ok_or_else(|| format!("{}: envmap without a filename", el.at))?;
+                    let path = self.path(&f);
+                    check_image(&path).map_err(|e| format!("{}: envmap: {e}", el.at))?;
+                    let s = self.float(el, "scale")?.unwrap_or(1.0);
+                    (([s; 3]), Some(path))
+                };
+                let rot = Mat3::from_mat4(xf);
+                let env = EnvironmentDesc {
+                    radiance,
+                    map,
+                    to_world: rot,
+                    source: Some(el.at.clone()),
+                };
+                if self.desc.environment.is_some() {
+                    self.warn(
+                        "second environment",
+                        format!(
+                            "{}: a second environment emitter: kalos keeps the first",
+                            el.at
+                        ),
+                    );
+                } else {
+                    self.desc.environment = Some(env);
+                }
+            }
+            "area" => {
+                return Err(format!(
+                    "{}: an area emitter must be inside a <shape>",
+                    el.at
+                ))
+            }
+            k => {
+                self.mark_all(el);
+                self.warn(
+                    &format!("emitter {k}"),
+                    format!(
+                        "{}: unsupported emitter '{k}': left out of the scene",
+                        el.at
+                    ),
+                );
+                return Ok(());
+            }
+        }
+        self.unused(el, &format!("emitter '{kind}'"));
+        Ok(())
+    }
+}
+
+/// Refuse an environment map that is not an image kalos or Mitsuba reads (by its first
+/// bytes: EXR, Radiance HDR, PFM, PNG, JPEG).
+pub(super) fn check_image(path: &Path) -> R<()> {
+    crate::input::check_regular_file(path, crate::input::max_input_bytes()?)?;
+    let mut head = [0u8; 16];
+    let n = {
+        use std::io::Read;
+        let mut f = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        f.read(&mut head)
+            .map_err(|e| format!("{}: {e}", path.display()))?
+    };
+    let h = &head[..n];
+    let ok = h.starts_with(&[0x76, 0x2f, 0x31, 0x01])
+        || h.starts_with(b"#?RADIANCE")
+        || h.starts_with(b"#?RGBE")
+        || h.starts_with(b"PF\n")
+        || h.starts_with(b"Pf\n")
+        || h.starts_with(b"\x89PNG")
+        || h.starts_with(&[0xff, 0xd8, 0xff]);
+    if ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "{}: not an image (expected EXR, HDR, PFM, PNG or JPEG data)",
+            path.display()
+        ))
+    }
+}

@@ -1,0 +1,242 @@
+//! The sensor (camera, film, sampler) and the integrator: what the file asks of a render.
+
+use super::*;
+
+impl<'a> Loader<'a> {
+    pub(super) fn sensor(&mut self, el: &'a El) -> R<()> {
+        let kind = el.kind();
+        if !known_plugin("sensor", kind) {
+            return Err(format!("{}: unknown sensor plugin '{kind}'", el.at));
+        }
+        if self.sensor_seen {
+            self.mark_all(el);
+            self.warn(
+                "second sensor",
+                format!("{}: more than one sensor: kalos uses the first", el.at),
+            );
+            return Ok(());
+        }
+        self.sensor_seen = true;
+        // film and sampler first: the field of view may depend on the aspect ratio
+        let (mut w, mut h) = (768u32, 576u32);
+        for c in &el.children {
+            let t = if c.tag == "ref" { self.resolve(c)? } else { c };
+            match t.tag.as_str() {
+                "film" => {
+                    c.used.set(true);
+                    if !known_plugin("film", t.kind()) {
+                        return Err(format!("{}: unknown film plugin '{}'", t.at, t.kind()));
+                    }
+                    if let Some(x) = self.int(t, "width")? {
+                        w = u32::try_from(x).map_err(|_| format!("{}: film width {x}", t.at))?;
+                    }
+                    if let Some(x) = self.int(t, "height")? {
+                        h = u32::try_from(x).map_err(|_| format!("{}: film height {x}", t.at))?;
+                    }
+                    crate::film::check_resolution(w, h)
+                        .map_err(|e| format!("{}: film: {e}", t.at))?;
+                    for r in t.children.iter().filter(|r| r.tag == "rfilter") {
+                        r.used.set(true);
+                        if !known_plugin("rfilter", r.kind()) {
+                            return Err(format!("{}: unknown rfilter plugin '{}'", r.at, r.kind()));
+                        }
+                        if r.kind() != "box" {
+                            self.warn(
+                                "rfilter",
+                                format!(
+                                    "{}: pixel filter '{}': kalos uses a box filter (the same mean, sharper edges, more noise)",
+                                    r.at,
+                                    r.kind()
+                                ),
+                            );
+                        }
+                        self.mark_all(r);
+                    }
+                    for k in [
+                        "crop_offset_x",
+                        "crop_offset_y",
+                        "crop_width",
+                        "crop_height",
+                    ] {
+                        if self.prop(t, k).is_some() {
+                            self.warn(
+                                "crop",
+                                format!("{}: film cropping is not supported: the whole image is rendered", t.at),
+                            );
+                        }
+                    }
+                    self.unused(t, &format!("film '{}'", t.kind()));
+                }
+                "sampler" => {
+                    c.used.set(true);
+                    if !known_plugin("sampler", t.kind()) {
+                        return Err(format!("{}: unknown sampler plugin '{}'", t.at, t.kind()));
+                    }
+                    if let Some(n) = self.int(t, "sample_count")? {
+                        let n = u32::try_from(n).ok().filter(|n| *n >= 1).ok_or_else(|| {
+                            format!("{}: sample_count {n}: must be at least 1", t.at)
+                        })?;
+                        self.desc.defaults.spp = Some(n);
+                    }
+                    self.mark_all(t);
+                }
+                _ => {}
+            }
+        }
+        self.desc.defaults.res = Some((w, h));
+        if !matches!(kind, "perspective" | "thinlens") {
+            self.mark_all(el);
+            self.warn(
+                &format!("sensor {kind}"),
+                format!(
+                    "{}: unsupported sensor '{kind}': kalos uses its default camera",
+                    el.at
+                ),
+            );
+            return Ok(());
+        }
+        if kind == "thinlens" {
+            self.warn(
+                "thinlens",
+                format!(
+                    "{}: thinlens sensor rendered as a pinhole (no depth of field)",
+                    el.at
+                ),
+            );
+            for k in ["aperture_radius", "focus_distance"] {
+                self.prop(el, k);
+            }
+        }
+        let axis = self.string(el, "fov_axis")?.unwrap_or_else(|| "x".into());
+        let (fov, axis) = match (self.float(el, "fov")?, self.string(el, "focal_length")?) {
+            (Some(f), _) => (f, axis),
+            (None, fl) => {
+                let fl = fl.unwrap_or_else(|| "50mm".into());
+                let mm: f32 = fl
+                    .trim()
+                    .trim_end_matches("mm")
+                    .trim()
+                    .parse()
+                    .ok()
+                    .filter(|v: &f32| *v > 0.0 && v.is_finite())
+                    .ok_or_else(|| {
+                        format!("{}: focal_length \"{fl}\": expected e.g. 50mm", el.at)
+                    })?;
+                let film = match axis.as_str() {
+                    "y" => 24.0f32,
+                    "diagonal" => 36.0f32.hypot(24.0),
+                    _ => 36.0,
+                };
+                ((2.0 * (film / (2.0 * mm)).atan()).to_degrees(), axis)
+            }
+        };
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(format!("{}: fov {fov}: must be in (0, 180) degrees", el.at));
+        }
+        let fov_axis = FovAxis::parse(&axis).ok_or_else(|| {
+            format!(
+                "{}: fov_axis \"{axis}\": expected x, y, diagonal, smaller or larger",
+                el.at
+            )
+        })?;
+        let xf = self.transform(el, "to_world")?;
+        let origin = xf.transform_point3(Vec3::ZERO);
+        let fwd = xf.transform_vector3(Vec3::Z).normalize_or_zero();
+        let up = xf.transform_vector3(Vec3::Y).normalize_or_zero();
+        if Mat3::from_mat4(xf).determinant() < 0.0 {
+            self.warn(
+                "mirrored sensor",
+                format!(
+                    "{}: the sensor's to_world mirrors the image (negative determinant): kalos renders it unmirrored",
+                    el.at
+                ),
+            );
+        }
+        let cam = CameraDesc {
+            origin: origin.into(),
+            target: (origin + fwd).into(),
+            up: up.into(),
+            fov,
+            fov_axis,
+        };
+        cam.validate()
+            .map_err(|e| format!("{}: sensor: {e}", el.at))?;
+        self.desc.camera = Some(cam);
+        self.unused(el, &format!("sensor '{kind}'"));
+        Ok(())
+    }
+
+    pub(super) fn integrator(&mut self, el: &'a El) -> R<()> {
+        let kind = el.kind();
+        if !known_plugin("integrator", kind) {
+            return Err(format!("{}: unknown integrator plugin '{kind}'", el.at));
+        }
+        match kind {
+            "path" | "volpath" | "volpathmis" | "prb" | "prbvolpath" | "bdpt" => {
+                if kind != "path" {
+                    self.warn(
+                        "integrator",
+                        format!("{}: integrator '{kind}': kalos renders the same image with its own estimator (see --integrator)", el.at),
+                    );
+                }
+                if let Some(d) = self.int(el, "max_depth")? {
+                    if d < -1 || d == 0 {
+                        return Err(format!(
+                            "{}: max_depth {d}: must be -1 (unlimited) or at least 1",
+                            el.at
+                        ));
+                    }
+                    self.desc.defaults.max_depth = Some(d.min(i32::MAX as i64) as i32);
+                }
+                // Mitsuba's roulette starts at depth rr_depth (default 5), counting the
+                // first hit as 1; kalos' --rr-min-depth counts the reflections before it.
+                let rr_depth = self.int(el, "rr_depth")?.unwrap_or(5);
+                self.desc.defaults.rr_min_depth =
+                    Some(rr_depth.saturating_sub(1).clamp(0, u32::MAX as i64) as u32);
+                if self.boolean(el, "hide_emitters")? == Some(true) {
+                    self.warn(
+                        "hide_emitters",
+                        format!(
+                            "{}: hide_emitters is not supported: emitters are visible",
+                            el.at
+                        ),
+                    );
+                }
+                self.unused(el, &format!("integrator '{kind}'"));
+            }
+            "direct" => {
+                self.mark_all(el);
+                self.desc.defaults.max_depth = Some(2);
+                self.warn(
+                    "integrator",
+                    format!(
+                        "{}: integrator 'direct': rendered as the path tracer with max_depth 2",
+                        el.at
+                    ),
+                );
+            }
+            // Mitsuba's AOV integrator: the radiance is its nested integrator's
+            "aov" => {
+                self.mark_all(el);
+                self.warn(
+                    "integrator aov",
+                    format!(
+                        "{}: integrator 'aov': kalos renders the radiance of the nested integrator, without the AOVs (see --aovs)",
+                        el.at
+                    ),
+                );
+                for c in el.children.iter().filter(|c| c.tag == "integrator") {
+                    self.integrator(c)?;
+                }
+            }
+            k => {
+                self.mark_all(el);
+                self.warn(
+                    "integrator",
+                    format!("{}: unsupported integrator '{k}': kalos renders radiance with its path tracer", el.at),
+                );
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,305 @@
+use super::*;
+
+fn scene(body: &str) -> Result<SceneDesc, String> {
+    parse(
+        &format!("<scene version=\"3.0.0\">\n{body}\n</scene>"),
+        "t.xml",
+        Path::new("."),
+    )
+}
+
+/// Mitsuba's path integrator starts its roulette at depth rr_depth (5 by default, the
+/// first hit counting 1): kalos' --rr-min-depth default becomes rr_depth - 1.
+#[test]
+fn rr_depth_becomes_the_roulette_default() {
+    let shape = r#"<shape type="rectangle"><bsdf type="diffuse"/></shape>"#;
+    assert_eq!(scene(shape).unwrap().defaults.rr_min_depth, Some(4));
+    let d = scene(&format!(
+        r#"<integrator type="path"><integer name="rr_depth" value="3"/></integrator>{shape}"#
+    ))
+    .unwrap();
+    assert_eq!(d.defaults.rr_min_depth, Some(2));
+    assert!(
+        d.warnings.iter().all(|w| !w.contains("rr_depth")),
+        "{:?}",
+        d.warnings
+    );
+    let d = scene(&format!(r#"<integrator type="path"/>{shape}"#)).unwrap();
+    assert_eq!(d.defaults.rr_min_depth, Some(4));
+}
+
+/// Mitsuba 0.6's diffuse reads `diffuseReflectance` before `reflectance`; a 3.x file
+/// has no such alias (the parameter is warned as unused).
+#[test]
+fn diffuse_reflectance_is_the_06_alias_of_reflectance() {
+    let body = r#"<shape type="rectangle"><bsdf type="diffuse">
+        <rgb name="diffuseReflectance" value="0.2 0.4 0.6"/>
+        <rgb name="reflectance" value="0.9 0.9 0.9"/></bsdf></shape>"#;
+    let old = parse(
+        &format!("<scene version=\"0.5.0\">{body}</scene>"),
+        "t.xml",
+        Path::new("."),
+    )
+    .unwrap();
+    assert_eq!(old.materials.last().unwrap().kd, [0.2, 0.4, 0.6]);
+    assert!(
+        old.warnings
+            .iter()
+            .any(|w| w.contains("overridden by diffuseReflectance")),
+        "{:?}",
+        old.warnings
+    );
+    let new = scene(&body.replace("diffuseReflectance", "diffuse_reflectance")).unwrap();
+    assert_eq!(new.materials.last().unwrap().kd, [0.9; 3]);
+    assert!(
+        new.warnings
+            .iter()
+            .any(|w| w.contains("'diffuse_reflectance'")),
+        "{:?}",
+        new.warnings
+    );
+}
+
+#[test]
+fn snake_case_matches_mitsuba() {
+    assert_eq!(snake_case("intIOR"), "int_ior");
+    assert_eq!(snake_case("toWorld"), "to_world");
+    assert_eq!(snake_case("specularReflectance"), "specular_reflectance");
+    assert_eq!(snake_case("max_depth"), "max_depth");
+}
+
+#[test]
+fn spectra_match_mitsuba_rgb_mode() {
+    // values printed by Mitsuba 3.9.1 scalar_rgb (mi.traverse) for the same spectra
+    let wl = [400.0, 500.0, 600.0, 700.0];
+    let v = [0.1, 0.8, 0.2, 0.1];
+    let r = spectrum_to_rgb(&wl, &v, true);
+    let e = spectrum_to_rgb(&wl, &v, false);
+    let want_r = [0.0139056, 0.584234, 0.47694];
+    let want_e = [0.071468, 0.551986, 0.424139];
+    for c in 0..3 {
+        assert!((r[c] - want_r[c]).abs() < 0.02, "{r:?}");
+        assert!((e[c] - want_e[c]).abs() < 0.02, "{e:?}");
+    }
+    let white = spectrum_to_rgb(&[360.0, 830.0], &[1.0, 1.0], true);
+    assert!(white.iter().all(|w| (w - 1.0).abs() < 0.01), "{white:?}");
+    let ee = spectrum_to_rgb(&[360.0, 830.0], &[0.3, 0.3], false);
+    let want = [0.361438, 0.284487, 0.272675];
+    for c in 0..3 {
+        assert!((ee[c] - want[c]).abs() < 0.005, "{ee:?}");
+    }
+}
+
+#[test]
+fn transforms_compose_in_mitsuba_order() {
+    let d = scene(
+        r#"<shape type="rectangle"><transform name="to_world">
+             <scale value="2"/><rotate x="1" angle="90"/><translate y="1"/>
+           </transform></shape>"#,
+    )
+    .unwrap();
+    // scale, then rotate the z=0 plane about x (to y = 0), then lift to y = 1
+    let b = d.bounds();
+    assert!(
+        (b.min - Vec3::new(-2.0, 1.0, -2.0)).length() < 1e-5,
+        "{b:?}"
+    );
+    assert!((b.max - Vec3::new(2.0, 1.0, 2.0)).length() < 1e-5, "{b:?}");
+    // normal +z rotated by +90 degrees about x is -y
+    let t = d.positions[0];
+    let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+    assert!((n - Vec3::NEG_Y).length() < 1e-5, "{n}");
+}
+
+#[test]
+fn defaults_refs_and_materials() {
+    let d = scene(
+        r#"<default name="r" value="0.25"/>
+           <bsdf type="roughconductor" id="gold"><string name="material" value="Au"/>
+             <float name="alpha" value="$r"/><string name="distribution" value="ggx"/></bsdf>
+           <bsdf type="twosided" id="glassy"><bsdf type="dielectric">
+             <string name="int_ior" value="water"/></bsdf></bsdf>
+           <shape type="cube"><ref id="gold"/></shape>
+           <shape type="sphere"><ref name="bsdf" id="glassy"/>
+             <emitter type="area"><rgb name="radiance" value="1, 2, 3"/></emitter></shape>"#,
+    )
+    .unwrap();
+    let gold = &d.materials[d.material[0] as usize];
+    match gold.model {
+        Some(SurfaceModel::Conductor {
+            alpha,
+            eta,
+            distribution,
+            ..
+        }) => {
+            assert_eq!(alpha, 0.25);
+            assert_eq!(distribution, Distribution::Ggx);
+            assert_eq!(eta[0], 0.143036);
+        }
+        ref m => panic!("{m:?}"),
+    }
+    assert_eq!(gold.illum, 2);
+    let last = &d.materials[*d.material.last().unwrap() as usize];
+    assert_eq!(last.ke, [1.0, 2.0, 3.0]);
+    match last.model {
+        Some(SurfaceModel::Dielectric { eta, alpha, .. }) => {
+            assert!((eta - 1.333 / 1.000277).abs() < 1e-5);
+            assert_eq!(alpha, 0.0);
+        }
+        ref m => panic!("{m:?}"),
+    }
+    assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+}
+
+#[test]
+fn errors_are_one_line_with_position() {
+    for (body, needle) in [
+        ("<shape type=\"cube\"", "t.xml:"),
+        ("<shape type=\"cube\"><ref id=\"nope\"/></shape>", "t.xml:2: <ref id=\"nope\">"),
+        ("<shape type=\"teapot\"/>", "unknown shape plugin 'teapot'"),
+        ("<bsdf type=\"fancy\" id=\"a\"/><shape type=\"cube\"/>", "unknown bsdf plugin 'fancy'"),
+        ("<shape type=\"cube\"><float name=\"x\" value=\"$nope\"/></shape>", "undefined parameter $nope"),
+        ("<shape type=\"sphere\"><float name=\"radius\" value=\"abc\"/></shape>", "not a number"),
+        ("<sensor type=\"perspective\"><float name=\"fov\" value=\"200\"/></sensor><shape type=\"cube\"/>", "fov 200"),
+        ("<shape type=\"cube\"><bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"phong\"/></bsdf></shape>",
+         "t.xml:2: roughconductor distribution \"phong\": must be \"beckmann\" or \"ggx\""),
+    ] {
+        let e = scene(body).unwrap_err();
+        assert!(e.contains(needle) && !e.contains('\n'), "{body}: {e}");
+    }
+    let e = parse(
+        "<scene version=\"3.0.0\">\n  <shape>\n</scene>",
+        "m.xml",
+        Path::new("."),
+    )
+    .unwrap_err();
+    assert!(e.starts_with("m.xml:3:"), "{e}");
+}
+
+#[test]
+fn unsupported_things_are_warned_once_with_the_line() {
+    let d = scene(
+        r#"<bsdf type="hair" id="h"/>
+           <shape type="cube"><ref id="h"/></shape>
+           <shape type="cube"><ref id="h"/><float name="wobble" value="1"/></shape>
+           <shape type="serialized"><string name="filename" value="x.serialized"/></shape>"#,
+    )
+    .unwrap();
+    let w = d.warnings.join("\n");
+    assert!(w.contains("t.xml:2: unsupported bsdf 'hair'"), "{w}");
+    assert!(w.contains("t.xml:4: parameter 'wobble'"), "{w}");
+    assert!(w.contains("t.xml:5: unsupported shape 'serialized'"), "{w}");
+    assert_eq!(d.warnings.len(), 3, "{w}");
+}
+
+/// Forms real files use that Mitsuba reads: a texture as a roughness, spectra split by
+/// spaces, Python's booleans, Palik's conductor names, a lookat without up.
+#[test]
+fn mitsubas_lenient_forms_are_read() {
+    let d = scene(
+        r#"<bsdf type="roughconductor" id="m"><texture type="bitmap" name="alpha">
+             <string name="filename" value="scenes/mitsuba/textures/floor.png"/></texture>
+             <string name="material" value="Ni_palik"/></bsdf>
+           <shape type="rectangle"><ref id="m"/></shape>
+           <shape type="rectangle"><bsdf type="diffuse"><spectrum name="reflectance"
+             value="400:0.5 500:0.5  600:0.5,700:0.5"/></bsdf></shape>
+           <shape type="rectangle"><boolean name="flip_normals" value="True"/>
+             <bsdf type="diffuse"/></shape>"#,
+    )
+    .unwrap();
+    let m = &d.materials[d.materials.len() - 3];
+    let ni = METALS.iter().find(|(n, _, _)| *n == "Ni").unwrap();
+    match &m.model {
+        Some(SurfaceModel::Conductor { eta, alpha, .. }) => {
+            assert_eq!(*eta, ni.1);
+            // the texture's mean
+            assert!(*alpha > 0.0 && *alpha < 1.0, "{alpha}");
+        }
+        other => panic!("{other:?}"),
+    }
+    let w = d.warnings.join("\n");
+    assert!(w.contains("\"Ni_palik\": rendered with \"Ni\""), "{w}");
+    let kd = d.materials[d.materials.len() - 2].kd;
+    assert!(kd.iter().all(|c| (c - 0.5).abs() < 0.02), "{kd:?}");
+    let e = scene(
+        r#"<shape type="cube"><bsdf type="conductor">
+             <string name="material" value="Xx_palik"/></bsdf></shape>"#,
+    )
+    .unwrap_err();
+    assert!(e.contains("\"Xx_palik\": not one of"), "{e}");
+    // lookat without up: Mitsuba's coordinate_system(dir).first, +x looking down -z
+    let d = scene(
+        r#"<sensor type="perspective"><transform name="to_world">
+             <lookat origin="0, 0, 5" target="0, 0, 0"/></transform></sensor>
+           <shape type="cube"/>"#,
+    )
+    .unwrap();
+    assert!((Vec3::from(d.camera.unwrap().up) - Vec3::X).length() < 1e-6);
+    // an aov integrator's radiance is its nested integrator's, with its max_depth
+    let d = scene(
+        r#"<integrator type="aov"><string name="aovs" value="nn:sh_normal"/>
+             <integrator type="path" name="radiance"><integer name="max_depth" value="2"/>
+             <boolean name="hide_emitters" value="False"/></integrator></integrator>
+           <shape type="cube"/>"#,
+    )
+    .unwrap();
+    assert_eq!(d.defaults.max_depth, Some(2));
+    assert!(d.warnings.iter().any(|w| w.contains("integrator 'aov'")));
+    // one of alpha_u, alpha_v alone, or with alpha: refused as Mitsuba does
+    for p in [
+        r#"<float name="alpha_u" value="0.4"/>"#,
+        r#"<float name="alpha" value="0.4"/><float name="alpha_v" value="0.4"/>"#,
+    ] {
+        let e = scene(&format!(
+            r#"<shape type="cube"><bsdf type="roughconductor">{p}</bsdf></shape>"#
+        ))
+        .unwrap_err();
+        assert!(e.contains("t.xml:2: roughconductor: "), "{e}");
+    }
+}
+
+#[test]
+fn camera_follows_mitsuba_conventions() {
+    let d = scene(
+        r#"<sensor type="perspective"><float name="fov" value="90"/>
+             <transform name="to_world"><lookat origin="1, 2, 3" target="1, 2, 0" up="0, 1, 0"/></transform>
+             <film type="hdrfilm"><integer name="width" value="200"/><integer name="height" value="100"/></film>
+           </sensor><shape type="cube"/>"#,
+    )
+    .unwrap();
+    let c = d.camera.unwrap();
+    assert_eq!(c.origin, [1.0, 2.0, 3.0]);
+    assert!((Vec3::from(c.target) - Vec3::new(1.0, 2.0, 2.0)).length() < 1e-6);
+    assert!((Vec3::from(c.up) - Vec3::Y).length() < 1e-6);
+    // fov_axis x (Mitsuba's default): 90 degrees across 200 pixels, so tan(v/2) = 1/2
+    assert_eq!((c.fov, c.fov_axis), (90.0, FovAxis::X));
+    assert!((c.tan_half_vertical(200, 100) - 0.5).abs() < 1e-6);
+    let v = c.vertical(200, 100);
+    assert!(
+        (v.fov - 2.0 * 0.5f32.atan().to_degrees()).abs() < 1e-3,
+        "{}",
+        v.fov
+    );
+    // another resolution (--res) keeps the 90 degrees across, as Mitsuba's -D resx/resy
+    assert!((c.tan_half_vertical(100, 300) - 3.0).abs() < 1e-5);
+    assert_eq!(d.defaults.res, Some((200, 100)));
+    // the other axes, resolved at the render's resolution
+    let axis = |a: &str| {
+        let d = scene(&format!(
+            r#"<sensor type="perspective"><float name="fov" value="90"/>
+                 <string name="fov_axis" value="{a}"/></sensor><shape type="cube"/>"#
+        ))
+        .unwrap();
+        let c = d.camera.unwrap();
+        [(200, 100), (100, 200)].map(|(w, h)| c.tan_half_vertical(w, h))
+    };
+    let near = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).abs() + (a[1] - b[1]).abs() < 1e-5;
+    assert!(near(axis("y"), [1.0, 1.0]));
+    assert!(near(axis("x"), [0.5, 2.0]));
+    assert!(near(axis("smaller"), [1.0, 2.0]));
+    assert!(near(axis("larger"), [0.5, 1.0]));
+    let d = 5f32.sqrt();
+    assert!(near(axis("diagonal"), [1.0 / d, 2.0 / d]));
+    let e = scene(r#"<sensor type="perspective"><string name="fov_axis" value="z"/></sensor>"#);
+    assert!(e.unwrap_err().contains("fov_axis \"z\""));
+}
