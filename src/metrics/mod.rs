@@ -11,6 +11,8 @@
 //! a broken image should not get a good score; [`check_comparable`] refuses such images
 //! (and images without pixels) up front, naming the file, where a user gives them.
 
+pub mod flip;
+
 use crate::image_io::RgbImage;
 use serde::Serialize;
 
