@@ -38,6 +38,18 @@ impl Range {
     }
 }
 
+/// The FLIP of files: LDR when every one is an 8-bit PNG, else HDR.
+pub fn range_of(paths: &[&std::path::Path]) -> Range {
+    let png = |p: &&std::path::Path| {
+        crate::image_io::format_of(p) == Ok(crate::image_io::Format::Png)
+    };
+    if paths.iter().all(png) {
+        Range::Ldr
+    } else {
+        Range::Hdr
+    }
+}
+
 /// A FLIP evaluation: the per-pixel map in [0, 1] (row-major) and its mean.
 #[derive(Clone, Debug)]
 pub struct FlipMap {
