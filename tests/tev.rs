@@ -50,6 +50,17 @@ fn temp(name: &str) -> std::path::PathBuf {
     d
 }
 
+/// `kalos render cornell --res RES --spp SPP -q --tev 127.0.0.1:PORT -o OUT`.
+fn render_to_tev(res: &str, spp: &str, port: u16, out: &std::path::Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_kalos"))
+        .args(["render", "cornell", "--res", res, "--spp", spp, "-q", "--tev"])
+        .arg(format!("127.0.0.1:{port}"))
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn render_streams_passes_to_tev() {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
@@ -62,13 +73,7 @@ fn render_streams_passes_to_tev() {
     });
     let dir = temp("stream");
     let out = dir.join("live.exr");
-    let st = Command::new(env!("CARGO_BIN_EXE_kalos"))
-        .args(["render", "cornell", "--res", "24x16", "--spp", "64", "-q", "--tev"])
-        .arg(format!("127.0.0.1:{port}"))
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let st = render_to_tev("24x16", "64", port, &out);
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
     assert!(st.stderr.is_empty(), "{}", String::from_utf8_lossy(&st.stderr));
     let ps = packets(&server.join().unwrap());
@@ -107,13 +112,7 @@ fn a_tev_that_is_not_running_costs_one_warning() {
     let port = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
     let dir = temp("absent");
     let out = dir.join("a.exr");
-    let st = Command::new(env!("CARGO_BIN_EXE_kalos"))
-        .args(["render", "cornell", "--res", "16x16", "--spp", "2", "-q", "--tev"])
-        .arg(format!("127.0.0.1:{port}"))
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let st = render_to_tev("16x16", "2", port, &out);
     assert!(st.status.success());
     let err = String::from_utf8_lossy(&st.stderr);
     assert_eq!(err.lines().count(), 1, "{err}");

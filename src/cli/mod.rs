@@ -47,7 +47,8 @@ pub enum Command {
         /// The results folder (results.json and the images).
         dir: std::path::PathBuf,
     },
-    /// Run named configurations at equal budgets against a reference: CSV, JSON, plots.
+    /// Run named configurations at equal budgets against a reference: CSV, JSON, plots
+    /// and report.html (a page to open in a browser).
     Experiment {
         /// The experiment file (.toml).
         file: std::path::PathBuf,

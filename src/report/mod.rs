@@ -53,8 +53,8 @@ fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 /// Ticks of a log axis over [lo, hi]: 1-2-5 of every decade, thinned to powers of ten
-/// when there are many, all nine steps when the range holds fewer than three: every
-/// axis gets labels, also one narrower than a decade.
+/// when there are many, 1-2-3-5 or all nine steps when the range holds fewer than three:
+/// every axis gets labels, also one narrower than a decade.
 pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
     if !(lo > 0.0 && hi >= lo && hi.is_finite()) {
         return vec![];
@@ -71,9 +71,11 @@ pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
         return of(&[1.0]);
     }
     if t.len() < 3 {
-        let all = of(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
-        if all.len() >= 3 {
-            return all;
+        for ms in [&[1.0, 2.0, 3.0, 5.0][..], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]] {
+            let more = of(ms);
+            if more.len() >= 3 {
+                return more;
+            }
         }
         // narrower than one step: the ends and the middle
         let mid = (lo * hi).sqrt();
@@ -369,8 +371,10 @@ mod tests {
         assert_eq!(tick_label(2.5e-5), "2.5e-5");
         assert_eq!(tick_label(1e-4), "1e-4");
         assert_eq!(log_ticks(16.0, 1024.0), vec![20.0, 50.0, 100.0, 200.0, 500.0, 1000.0]);
-        // inside one decade: the nine steps
-        assert_eq!(log_ticks(0.02, 0.08).len(), 7);
+        // inside one decade: 1-2-3-5, else the nine steps
+        assert_eq!(log_ticks(0.08, 0.45), vec![0.1, 0.2, 0.30000000000000004]);
+        assert_eq!(log_ticks(0.02, 0.08).len(), 3);
+        assert_eq!(log_ticks(0.06, 0.095).len(), 4);
         // narrower than a step: still three labels
         assert_eq!(log_ticks(0.021, 0.029).len(), 3);
     }
