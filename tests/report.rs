@@ -43,7 +43,11 @@ fn tiny_experiment(name: &str) -> PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     std::fs::write(d.join("tiny.toml"), EXPERIMENT).unwrap();
     let out = kalos(&["experiment", "tiny.toml", "-q"], &d);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     d
 }
 
@@ -80,19 +84,34 @@ fn the_report_holds_every_section_and_image_and_is_rebuilt_the_same() {
     assert!(html.contains("&plusmn;"));
     // the plots have every panel's y label, FLIP among them
     let svg = std::fs::read_to_string(res.join("error-vs-spp.svg")).unwrap();
-    for label in ["RMSE", "relMSE", "share of pixels with &gt; 5% error", "mean FLIP"] {
+    for label in [
+        "RMSE",
+        "relMSE",
+        "share of pixels with &gt; 5% error",
+        "mean FLIP",
+    ] {
         assert!(svg.contains(label), "no y label {label:?}");
     }
     assert!(!svg.contains(".000<"), "axis labels with needless decimals");
     // `kalos report` rebuilds the same page from the folder
     let out = kalos(&["report", "tiny-results"], &d);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert_eq!(std::fs::read_to_string(res.join("report.html")).unwrap(), html);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(res.join("report.html")).unwrap(),
+        html
+    );
     // a folder that holds no results: one line, non-zero exit
     let out = kalos(&["report", "."], &d);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.lines().count() == 1 && err.contains("no results.json"), "{err}");
+    assert!(
+        err.lines().count() == 1 && err.contains("no results.json"),
+        "{err}"
+    );
     browser_check(&res.join("report.html"));
     std::fs::remove_dir_all(&d).ok();
 }
@@ -102,8 +121,15 @@ fn a_second_run_writes_a_new_folder() {
     let d = tiny_experiment("again");
     let first = std::fs::read(d.join("tiny-results/results.json")).unwrap();
     let out = kalos(&["experiment", "tiny.toml", "-q"], &d);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert_eq!(std::fs::read(d.join("tiny-results/results.json")).unwrap(), first);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read(d.join("tiny-results/results.json")).unwrap(),
+        first
+    );
     let dated: Vec<_> = std::fs::read_dir(&d)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
@@ -132,7 +158,8 @@ fn on_path(name: &str) -> Option<PathBuf> {
 /// browser, Node or playwright-core are missing.
 fn browser_check(report: &Path) {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser/check_report.js");
-    let module = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser/node_modules/playwright-core");
+    let module =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser/node_modules/playwright-core");
     let chromium = std::env::var_os("KALOS_CHROMIUM")
         .map(PathBuf::from)
         .or_else(|| on_path("chromium"))

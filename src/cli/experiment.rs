@@ -448,7 +448,9 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
             let key_file = out.join("reference.key");
             let is_cached = |d: &Path| {
                 d.join("reference.exr").exists()
-                    && crate::input::read_text(&d.join("reference.key")).ok().as_deref()
+                    && crate::input::read_text(&d.join("reference.key"))
+                        .ok()
+                        .as_deref()
                         == Some(key.as_str())
             };
             let img = if is_cached(&out) {

@@ -129,7 +129,10 @@ pub fn run(cli: Cli) -> Result<(), String> {
         } => {
             if let Some(p) = &map {
                 if crate::image_io::format_of(p) != Ok(crate::image_io::Format::Png) {
-                    return Err(format!("--map {}: the error map is written as .png", p.display()));
+                    return Err(format!(
+                        "--map {}: the error map is written as .png",
+                        p.display()
+                    ));
                 }
             }
             let x = crate::image_io::read_image(&image)?;

@@ -16,6 +16,9 @@
 //! green and blue). The viewing condition is the reference's default, 67 pixels per degree
 //! (0.7 m from a 0.7 m wide 3840-pixel screen).
 
+// The constants are written as the reference implementation writes them (rounded to f32).
+#![allow(clippy::excessive_precision)]
+
 use crate::image_io::RgbImage;
 use rayon::prelude::*;
 
@@ -40,9 +43,8 @@ impl Range {
 
 /// The FLIP of files: LDR when every one is an 8-bit PNG, else HDR.
 pub fn range_of(paths: &[&std::path::Path]) -> Range {
-    let png = |p: &&std::path::Path| {
-        crate::image_io::format_of(p) == Ok(crate::image_io::Format::Png)
-    };
+    let png =
+        |p: &&std::path::Path| crate::image_io::format_of(p) == Ok(crate::image_io::Format::Png);
     if paths.iter().all(png) {
         Range::Ldr
     } else {
@@ -190,10 +192,7 @@ fn spatial_filters(ppd: f32) -> (Vec<[f32; 2]>, Vec<[f32; 2]>) {
     for i in -r..=r {
         let x = i as f32 / ppd;
         let x2 = x * x;
-        let a = [
-            gaussian_ab(x2, A1[0], B1[0]),
-            gaussian_ab(x2, A1[1], B1[1]),
-        ];
+        let a = [gaussian_ab(x2, A1[0], B1[0]), gaussian_ab(x2, A1[1], B1[1])];
         let b = [
             gaussian_sqrt(x2, A1[2], B1[2]),
             gaussian_sqrt(x2, A2_CZ, B2_CZ),
@@ -336,7 +335,12 @@ pub fn ldr_flip(reference: &[C3], test: &[C3], w: usize, h: usize, ppd: f32) -> 
         });
         // (dx, ddx, dy, ddy)
         convolve::<4, [f32; 3], _>(&hx, (w, h), m, false, |k, c| {
-            [ff[k][0] * c[0], ff[k][0] * c[1], ff[k][1] * c[2], ff[k][2] * c[2]]
+            [
+                ff[k][0] * c[0],
+                ff[k][0] * c[1],
+                ff[k][1] * c[2],
+                ff[k][2] * c[2],
+            ]
         })
     };
     let (er, et) = (features(&r), features(&t));

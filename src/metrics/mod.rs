@@ -248,7 +248,11 @@ impl Metrics {
     }
 
     /// Compare test image `x` with reference `y`, FLIP of the given dynamic range.
-    pub fn compute_range(x: &RgbImage, y: &RgbImage, range: flip::Range) -> Result<Metrics, String> {
+    pub fn compute_range(
+        x: &RgbImage,
+        y: &RgbImage,
+        range: flip::Range,
+    ) -> Result<Metrics, String> {
         let m = mse(x, y)?;
         let (count, share) = perceptual_error(x, y)?;
         Ok(Metrics {

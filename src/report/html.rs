@@ -209,11 +209,9 @@ type Metric = fn(&Row) -> Option<f64>;
 const METRICS: [(&str, &str, Metric); 4] = [
     ("RMSE", "RMSE", |r| Some(r.rmse)),
     ("relMSE", "relMSE", |r| Some(r.relmse)),
-    (
-        "Perceptual error",
-        "share of pixels with > 5% error",
-        |r| Some(r.perceptual_share),
-    ),
+    ("Perceptual error", "share of pixels with > 5% error", |r| {
+        Some(r.perceptual_share)
+    }),
     ("FLIP", "mean FLIP", |r| r.flip),
 ];
 
@@ -529,7 +527,10 @@ mod tests {
     fn dates_and_budgets_read_as_people_write_them() {
         let d = today();
         assert_eq!(d.len(), 10);
-        assert!(d.starts_with("20") && &d[4..5] == "-" && &d[7..8] == "-", "{d}");
+        assert!(
+            d.starts_with("20") && &d[4..5] == "-" && &d[7..8] == "-",
+            "{d}"
+        );
         assert_eq!(budget_text(64.0, "spp"), "64");
         assert_eq!(budget_text(0.5, "seconds"), "0.5");
         assert_eq!(esc("a<b & \"c\""), "a&lt;b &amp; &quot;c&quot;");

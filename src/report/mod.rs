@@ -71,7 +71,10 @@ pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
         return of(&[1.0]);
     }
     if t.len() < 3 {
-        for ms in [&[1.0, 2.0, 3.0, 5.0][..], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]] {
+        for ms in [
+            &[1.0, 2.0, 3.0, 5.0][..],
+            &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+        ] {
             let more = of(ms);
             if more.len() >= 3 {
                 return more;
@@ -370,7 +373,10 @@ mod tests {
         assert_eq!(tick_label(0.025), "0.025");
         assert_eq!(tick_label(2.5e-5), "2.5e-5");
         assert_eq!(tick_label(1e-4), "1e-4");
-        assert_eq!(log_ticks(16.0, 1024.0), vec![20.0, 50.0, 100.0, 200.0, 500.0, 1000.0]);
+        assert_eq!(
+            log_ticks(16.0, 1024.0),
+            vec![20.0, 50.0, 100.0, 200.0, 500.0, 1000.0]
+        );
         // inside one decade: 1-2-3-5, else the nine steps
         assert_eq!(log_ticks(0.08, 0.45), vec![0.1, 0.2, 0.30000000000000004]);
         assert_eq!(log_ticks(0.02, 0.08).len(), 3);
