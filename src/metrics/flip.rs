@@ -458,24 +458,44 @@ pub fn flip(test: &RgbImage, reference: &RgbImage, range: Range) -> Result<FlipM
 }
 
 /// The magma colour map (as the reference's error maps use) at t in [0, 1], 8-bit sRGB:
-/// a degree-6 polynomial fit of matplotlib's table (within one 8-bit step of it).
+/// matplotlib's magma table (public domain) at every 16th of its 256 entries and the
+/// last, linearly interpolated (within one 8-bit step of the full table).
 pub fn magma(t: f32) -> [u8; 3] {
-    const C: [[f32; 3]; 7] = [
-        [-0.002136485, -0.000749655, -0.005386128],
-        [0.2516605407, 0.6775232437, 2.4940265993],
-        [8.3537172792, -3.5777195150, 0.3144679030],
-        [-27.668733086, 14.264730781, -13.649213188],
-        [52.176139812, -27.943606072, 12.944169442],
-        [-50.768525365, 29.046582821, 4.2341529938],
-        [18.655705066, -11.489773520, -5.6019615087],
+    const KNOTS: [[f32; 3]; 17] = [
+        [0.001462, 0.000466, 0.013866],
+        [0.039608, 0.031090, 0.133515],
+        [0.113094, 0.065492, 0.276784],
+        [0.211718, 0.061992, 0.418647],
+        [0.316654, 0.071690, 0.485380],
+        [0.414709, 0.110431, 0.504662],
+        [0.512831, 0.148179, 0.507648],
+        [0.613617, 0.181811, 0.498536],
+        [0.716387, 0.214982, 0.475290],
+        [0.816914, 0.255895, 0.436461],
+        [0.904281, 0.319610, 0.388137],
+        [0.960949, 0.418323, 0.359630],
+        [0.986700, 0.535582, 0.382210],
+        [0.996096, 0.653659, 0.446213],
+        [0.996898, 0.769591, 0.534892],
+        [0.992440, 0.884330, 0.640099],
+        [0.987053, 0.991438, 0.749504],
     ];
     let t = if t.is_nan() { 1.0 } else { t.clamp(0.0, 1.0) };
+    // table index 0..255; knot k is entry 16 k, the last knot entry 255
+    let idx = t * 255.0;
+    let k = ((idx / 16.0) as usize).min(15);
+    let (a, b) = (
+        16.0 * k as f32,
+        if k == 15 {
+            255.0
+        } else {
+            16.0 * (k + 1) as f32
+        },
+    );
+    let f = ((idx - a) / (b - a)).clamp(0.0, 1.0);
     let mut out = [0u8; 3];
-    for (k, o) in out.iter_mut().enumerate() {
-        let mut v = 0f32;
-        for c in C.iter().rev() {
-            v = v * t + c[k];
-        }
+    for (c, o) in out.iter_mut().enumerate() {
+        let v = KNOTS[k][c] + f * (KNOTS[k + 1][c] - KNOTS[k][c]);
         *o = (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
     }
     out
@@ -501,8 +521,10 @@ mod tests {
     #[test]
     fn magma_ends_match_the_table() {
         // matplotlib's magma: (0.001462, 0.000466, 0.013866) .. (0.987053, 0.991438, 0.749504)
-        assert_eq!(magma(0.0), [0, 0, 3]);
+        assert_eq!(magma(0.0), [0, 0, 4]);
         assert_eq!(magma(1.0), [252, 253, 191]);
+        // the middle of the table, entry 128 (0.716387, 0.214982, 0.475290) at 128/255
+        assert_eq!(magma(128.0 / 255.0), [183, 55, 121]);
     }
 
     #[test]
