@@ -16,6 +16,9 @@ pub trait Progress: Sync {
     fn advance(&self, _samples: u64) {}
     /// A line of news (predicted work, phase changes).
     fn message(&self, _text: &str) {}
+    /// A pass of samples is done: `image` computes the mean image so far (`width` x
+    /// `height` linear RGB, row-major) for a live preview; only a listener calls it.
+    fn pass_image(&self, _width: u32, _height: u32, _image: &dyn Fn() -> Vec<[f32; 3]>) {}
     /// The render is over.
     fn finish(&self) {}
     /// True when the user asked to stop: the pipeline ends at the next row and returns

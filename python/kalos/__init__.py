@@ -203,10 +203,35 @@ def _arrays(width: int, height: int, image: bytes, variance: bytes, count: bytes
     return r
 
 
+ProgressArg = Union[bool, None, Callable[[int, int], Any]]
+
+
+def _progress(progress: ProgressArg, what: str) -> Tuple[Optional[Callable[[int, int], Any]], Any]:
+    """The callback of ``progress=``: a tqdm bar for True (``tqdm.auto``: a widget in
+    Jupyter, a text bar in a terminal), none for False or None, the user's own callable
+    as given. Returns (callback, bar to close or None)."""
+    if progress is None or progress is False:
+        return None, None
+    if callable(progress) and not isinstance(progress, bool):
+        return progress, None
+    if progress is not True:
+        raise TypeError(f"progress: expected True, False or a callable(done, total), got {progress!r}")
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=0, desc=what, unit="sample", unit_scale=True, leave=False, dynamic_ncols=True)
+
+    def update(done: int, total: int) -> None:
+        if bar.total != total:
+            bar.total = total
+        bar.update(done - bar.n)
+
+    return update, bar
+
+
 def render(
     scene: Union[str, os.PathLike, Scene],
     *,
-    progress: Optional[Callable[[int, int], Any]] = None,
+    progress: ProgressArg = True,
     **options: Any,
 ) -> RenderResult:
     """Render a scene (a ``Scene``, a built-in name or a scene file) with the options of
@@ -214,15 +239,22 @@ def render(
     ``kalos.options()`` lists them with their defaults).
 
     Returns a ``RenderResult``: the (H, W, 3) float32 image with ``.variance``, ``.count``,
-    ``.stats`` and ``.film``. The GIL is released while rendering; ``progress(done,
-    total)``, if given, is called every 100 ms with the samples done and planned.
+    ``.stats`` and ``.film``. The GIL is released while rendering. ``progress``: a tqdm
+    progress bar by default (in a terminal and in Jupyter), ``False`` for none, or a
+    callable ``progress(done, total)`` called every 100 ms with the samples done and
+    planned.
 
     Raises ValueError for a bad option (the CLI's one-line message), TypeError for an
     unknown keyword, FileNotFoundError / SceneError for a missing / unreadable scene file,
     and KeyboardInterrupt on Ctrl-C (the render stops at the next row of pixels)."""
     argv = _argv(options)
     sc = _scene(scene)
-    out = _kalos.render(sc._native, argv, progress)
+    callback, bar = _progress(progress, f"kalos {os.path.basename(sc.spec)}")
+    try:
+        out = _kalos.render(sc._native, argv, callback)
+    finally:
+        if bar is not None:
+            bar.close()
     for w in out.warnings:
         _warnings.warn(w, KalosWarning, stacklevel=2)
     r = _arrays(out.width, out.height, out.image, out.variance, out.count)
@@ -351,14 +383,20 @@ def read(path: Union[str, os.PathLike]) -> np.ndarray:
     return np.frombuffer(data, dtype="<f4").reshape(h, w, 3).copy()
 
 
+def _is_png(img: Any) -> bool:
+    return isinstance(img, (str, os.PathLike)) and os.fspath(img).lower().endswith(".png")
+
+
 def compare(image: Any, reference: Any) -> Dict[str, Any]:
     """``kalos compare``'s metrics of an image against a reference (arrays or image
     paths): rmse, relmse, mse, perceptual_count and perceptual_share (pixels over 5%
-    relative colour error), luminance_ratio, width, height."""
+    relative colour error), luminance_ratio, flip (NVIDIA's FLIP: LDR-FLIP when both are
+    PNG files, else HDR-FLIP of linear radiance; ``flip_range`` says which), width, height."""
+    ldr = _is_png(image) and _is_png(reference)
     x = _image_arg(image, "image")
     y = _image_arg(reference, "reference")
     return json.loads(
-        _kalos.compare(x.shape[1], x.shape[0], x.tobytes(), y.shape[1], y.shape[0], y.tobytes())
+        _kalos.compare(x.shape[1], x.shape[0], x.tobytes(), y.shape[1], y.shape[0], y.tobytes(), ldr)
     )
 
 from . import distributed  # noqa: E402  (pure Python; imports Dask only when used)

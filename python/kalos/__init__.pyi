@@ -59,7 +59,7 @@ def load(scene: Union[str, os.PathLike[str]]) -> Scene: ...
 def render(
     scene: SceneLike,
     *,
-    progress: Optional[Callable[[int, int], Any]] = ...,
+    progress: Union[bool, None, Callable[[int, int], Any]] = ...,
     spp: Optional[int] = ...,
     time: Optional[float] = ...,
     res: Optional[Union[Tuple[int, int], str]] = ...,

@@ -541,7 +541,8 @@ fn read_image<'py>(
 
 /// `kalos compare`'s metrics of an image against a reference, as JSON.
 #[pyfunction]
-#[pyo3(signature = (width, height, image, ref_width, ref_height, reference))]
+#[pyo3(signature = (width, height, image, ref_width, ref_height, reference, ldr=false))]
+#[allow(clippy::too_many_arguments)]
 fn compare(
     width: u32,
     height: u32,
@@ -549,12 +550,18 @@ fn compare(
     ref_width: u32,
     ref_height: u32,
     reference: &[u8],
+    ldr: bool,
 ) -> PyResult<String> {
     let x = rgb_from_bytes(width, height, image, "image")?;
     let y = rgb_from_bytes(ref_width, ref_height, reference, "reference")?;
     kalos::metrics::check_comparable(&x, "image").map_err(value_error)?;
     kalos::metrics::check_comparable(&y, "reference").map_err(value_error)?;
-    let m = kalos::metrics::Metrics::compute(&x, &y)
+    let range = if ldr {
+        kalos::metrics::flip::Range::Ldr
+    } else {
+        kalos::metrics::flip::Range::Hdr
+    };
+    let m = kalos::metrics::Metrics::compute_range(&x, &y, range)
         .map_err(|e| value_error(format!("image vs reference: {e}")))?;
     serde_json::to_string(&m).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }

@@ -1,6 +1,8 @@
 //! `kalos experiment FILE.toml`: named configurations (any render options) run at a list of
 //! equal budgets (seconds or spp) against a reference; writes results.csv, results.json,
-//! error-versus-time plots (log-log, PNG and SVG) and a side-by-side crop.
+//! error-versus-time and -spp plots (log-log, PNG and SVG), a side-by-side crop and
+//! report.html (`report::html`), into a new folder: results written before are never
+//! overwritten.
 //!
 //! ```toml
 //! scene = "cornell"                 # built-in, or an .obj/.toml path relative to this file
@@ -33,7 +35,8 @@ use crate::image_io::{read_image, write_image, RgbImage};
 use crate::metrics::Metrics;
 use crate::pipeline::Silent;
 use crate::render::render_scene;
-use crate::report::{crop, plot_panels, side_by_side, Panel, Series};
+use crate::report::html::{budget_text, safe_name, Manifest};
+use crate::report::{crop, side_by_side};
 use clap::Parser;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -131,18 +134,6 @@ fn parse_render(scene: &str, options: &[&str], what: &str) -> Result<RenderArgs,
 
 fn words(s: &str) -> Vec<&str> {
     s.split_whitespace().collect()
-}
-
-fn safe_name(s: &str) -> String {
-    s.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
 }
 
 /// Options the experiment sets on every run itself: (option, who sets it). Given again in
@@ -429,14 +420,13 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
         }
         (None, None) => None,
     };
-    let out = out.unwrap_or_else(|| {
-        dir.join(format!(
-            "{}-results",
-            file.file_stem()
-                .and_then(|s| s.to_str())
-                .unwrap_or("experiment")
-        ))
-    });
+    let stem = file
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("experiment");
+    // the default folder; a reference rendered into it before is reused from there
+    let usual = dir.join(format!("{stem}-results"));
+    let out = out.unwrap_or_else(|| new_folder(&usual, &crate::report::html::today()));
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
 
     // The reference: an image or a constant (read above), or a cached render.
@@ -456,10 +446,22 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
             let key = format!("{scene_spec} {}", o.join(" "));
             let cached = out.join("reference.exr");
             let key_file = out.join("reference.key");
-            let img = if cached.exists()
-                && crate::input::read_text(&key_file).ok().as_deref() == Some(key.as_str())
-            {
+            let is_cached = |d: &Path| {
+                d.join("reference.exr").exists()
+                    && crate::input::read_text(&d.join("reference.key"))
+                        .ok()
+                        .as_deref()
+                        == Some(key.as_str())
+            };
+            let img = if is_cached(&out) {
                 read_image(&cached)?
+            } else if is_cached(&usual) {
+                // rendered by an earlier run into the usual folder: copied, not redone
+                let img = read_image(&usual.join("reference.exr"))?;
+                write_image(&cached, &img, 0.0, &[])?;
+                std::fs::write(&key_file, &key)
+                    .map_err(|e| format!("{}: {e}", key_file.display()))?;
+                img
             } else {
                 if !quiet {
                     eprintln!("kalos: rendering the reference ({key})");
@@ -482,7 +484,12 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
         }
     };
 
+    if ex.reference.spp.is_none() {
+        // the report shows the reference beside the runs
+        write_image(&out.join("reference.exr"), &reference, 0.0, &[])?;
+    }
     let repeats = plan.repeats;
+    let mut images = Vec::new();
     let mut rows: Vec<ResultRow> = Vec::new();
     // Budgets outer, configurations inner: runs of one budget see the same machine load.
     let mut last: Vec<Option<RgbImage>> = vec![None; ex.configs.len()];
@@ -491,11 +498,7 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
             for rep in 0..repeats {
                 let mut o = common.clone();
                 o.extend(words(&c.options));
-                let bs = if kind == "seconds" {
-                    b.to_string()
-                } else {
-                    (b as u32).to_string()
-                };
+                let bs = budget_text(b, kind);
                 let seed = rep.to_string();
                 o.extend([
                     if kind == "seconds" { "--time" } else { "--spp" },
@@ -523,14 +526,15 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
                 let m = &row.metrics;
                 if !quiet {
                     eprintln!(
-                        "kalos: {:<16} {kind} {b:<6} seed {rep}: {:.2} s, {} spp, rmse {:.5}, relmse {:.5}, perceptual {:.1}%",
-                        c.name, row.seconds(), row.spp, m.rmse, m.relmse, m.perceptual_share * 100.0
+                        "kalos: {:<16} {kind} {b:<6} seed {rep}: {:.2} s, {} spp, rmse {:.5}, relmse {:.5}, perceptual {:.1}%, flip {:.4}",
+                        c.name, row.seconds(), row.spp, m.rmse, m.relmse, m.perceptual_share * 100.0, m.flip
                     );
                 }
                 rows.push(row);
                 if rep == 0 {
-                    let img_path = out.join(format!("{}-{}.exr", safe_name(&c.name), bs));
-                    write_image(&img_path, &r.image, 0.0, &[])?;
+                    let img_name = format!("{}-{}.exr", safe_name(&c.name), bs);
+                    write_image(&out.join(&img_name), &r.image, 0.0, &[])?;
+                    images.push((c.name.clone(), b, img_name));
                     last[ci] = Some(r.image);
                 }
             }
@@ -545,11 +549,11 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
 
     // Tables.
     let mut csv = String::from(
-        "config,budget,budget_kind,seed,seconds,spp,paths,mse,rmse,relmse,perceptual_count,perceptual_share,luminance_ratio,efficiency\n",
+        "config,budget,budget_kind,seed,seconds,spp,paths,mse,rmse,relmse,perceptual_count,perceptual_share,luminance_ratio,efficiency,flip\n",
     );
     for r in &rows {
         csv += &format!(
-            "{},{},{},{},{:.4},{},{},{:.6e},{:.6e},{:.6e},{},{:.6},{:.6},{:.6e}\n",
+            "{},{},{},{},{:.4},{},{},{:.6e},{:.6e},{:.6e},{},{:.6},{:.6},{:.6e},{:.6}\n",
             csv_field(&r.config),
             r.budget,
             r.budget_kind,
@@ -563,7 +567,8 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
             r.metrics.perceptual_count,
             r.metrics.perceptual_share,
             r.metrics.luminance_ratio,
-            r.metrics.efficiency.unwrap_or(0.0)
+            r.metrics.efficiency.unwrap_or(0.0),
+            r.metrics.flip
         );
     }
     let write = |name: &str, data: String| -> Result<(), String> {
@@ -576,61 +581,29 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
         serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())? + "\n",
     )?;
 
-    // Plots: metrics averaged over repeats, against measured seconds (and spp for spp budgets).
-    let averaged = |metric: fn(&ResultRow) -> f64, x: fn(&ResultRow) -> f64| -> Vec<Series> {
-        ex.configs
-            .iter()
-            .map(|c| Series {
-                name: c.name.clone(),
-                points: budgets
-                    .iter()
-                    .map(|&b| {
-                        let rs: Vec<&ResultRow> = rows
-                            .iter()
-                            .filter(|r| r.config == c.name && r.budget == b)
-                            .collect();
-                        let n = rs.len().max(1) as f64;
-                        (
-                            rs.iter().map(|r| x(r)).sum::<f64>() / n,
-                            rs.iter().map(|r| metric(r)).sum::<f64>() / n,
-                        )
-                    })
-                    .collect(),
-            })
-            .collect()
+    let manifest = Manifest {
+        name: file
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default(),
+        scene: ex.scene.clone(),
+        budget_kind: kind.to_string(),
+        budgets: budgets.clone(),
+        configs: ex.configs.iter().map(|c| c.name.clone()).collect(),
+        repeats,
+        crop: plan.crop,
+        exposure: ex.exposure.unwrap_or(0.0),
+        reference: Some("reference.exr".into()),
+        images,
+        date: crate::report::html::today(),
+        cpu: crate::report::html::cpu_name(),
     };
-    let panels = |x: fn(&ResultRow) -> f64, x_label: &str| {
-        vec![
-            Panel {
-                title: "RMSE".into(),
-                x_label: x_label.into(),
-                y_label: "RMSE".into(),
-                series: averaged(|r| r.metrics.rmse, x),
-            },
-            Panel {
-                title: "Perceptual error".into(),
-                x_label: x_label.into(),
-                y_label: "share of pixels with > 5% error".into(),
-                series: averaged(|r| r.metrics.perceptual_share, x),
-            },
-            Panel {
-                title: "relMSE".into(),
-                x_label: x_label.into(),
-                y_label: "relMSE".into(),
-                series: averaged(|r| r.metrics.relmse, x),
-            },
-        ]
-    };
-    plot_panels(
-        &out.join("error-vs-time"),
-        &panels(|r| r.seconds(), "render time (s)"),
+    write(
+        crate::report::html::MANIFEST,
+        serde_json::to_string_pretty(&manifest).map_err(|e| e.to_string())? + "\n",
     )?;
-    if kind == "spp" {
-        plot_panels(
-            &out.join("error-vs-spp"),
-            &panels(|r| r.spp as f64, "samples per pixel"),
-        )?;
-    }
+    // the plots and report.html, from the files just written (as `kalos report` does)
+    let report = crate::report::html::rebuild(&out)?;
 
     // Side by side: the same crop of every configuration (largest budget) and the reference.
     let c = plan.crop;
@@ -647,11 +620,32 @@ pub fn run(file: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), String>
     )?;
     if !quiet {
         eprintln!(
-            "kalos: wrote {}/results.csv, results.json, error-vs-time.png/.svg, side-by-side.png",
-            out.display()
+            "kalos: wrote {}/results.csv, results.json, error-vs-time and error-vs-spp .png/.svg, side-by-side.png and {}",
+            out.display(),
+            report.display()
         );
     }
     Ok(())
+}
+
+/// The default results folder: `usual` (FILE-results) when it does not exist yet, else
+/// FILE-results-DATE, FILE-results-DATE-2, ...: results written before, committed ones
+/// too, are never overwritten.
+fn new_folder(usual: &Path, date: &str) -> PathBuf {
+    if !usual.exists() {
+        return usual.to_path_buf();
+    }
+    let base = format!("{}-{date}", usual.display());
+    (1..)
+        .map(|i| {
+            PathBuf::from(if i == 1 {
+                base.clone()
+            } else {
+                format!("{base}-{i}")
+            })
+        })
+        .find(|p| !p.exists())
+        .unwrap_or_else(|| usual.to_path_buf())
 }
 
 /// A CSV field: quoted as RFC 4180 has it when it holds a comma, a quote or a line break
@@ -699,6 +693,24 @@ mod tests {
             n += 1;
         }
         assert!(n >= 5, "{n} experiment files");
+    }
+
+    #[test]
+    fn results_written_before_are_never_overwritten() {
+        let d = std::env::temp_dir().join(format!("kalos-newfolder-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        let usual = d.join("x-results");
+        assert_eq!(new_folder(&usual, "2026-01-02"), usual);
+        std::fs::create_dir(&usual).unwrap();
+        let second = new_folder(&usual, "2026-01-02");
+        assert_eq!(second, d.join("x-results-2026-01-02"));
+        std::fs::create_dir(&second).unwrap();
+        assert_eq!(
+            new_folder(&usual, "2026-01-02"),
+            d.join("x-results-2026-01-02-2")
+        );
+        std::fs::remove_dir_all(&d).ok();
     }
 
     #[test]

@@ -7,6 +7,7 @@ pub mod progress;
 pub mod radiosity;
 pub mod reference;
 pub mod render;
+pub mod tev;
 
 use clap::{Parser, Subcommand};
 
@@ -25,7 +26,8 @@ pub enum Command {
     /// List the built-in scenes.
     Scenes,
     /// Error metrics of an image against a reference: RMSE, relMSE, perceptual error
-    /// (pixels whose relative colour error exceeds 5%) and the ratio of mean luminances.
+    /// (pixels whose relative colour error exceeds 5%), the ratio of mean luminances and
+    /// FLIP (LDR-FLIP when both images are PNG, else HDR-FLIP).
     Compare {
         /// The image to judge (.exr, .pfm or .png).
         image: std::path::PathBuf,
@@ -34,13 +36,26 @@ pub enum Command {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+        /// Write the false-colour error map (magma, dark: no error) to this PNG.
+        #[arg(long, value_name = "OUT.png")]
+        map: Option<std::path::PathBuf>,
+        /// The error the map shows: FLIP or the relative colour error (100% at the top).
+        #[arg(long, value_enum, default_value = "flip")]
+        map_metric: crate::metrics::MapKind,
     },
-    /// Run named configurations at equal budgets against a reference: CSV, JSON, plots.
+    /// Rebuild report.html of a folder `kalos experiment` wrote.
+    Report {
+        /// The results folder (results.json and the images).
+        dir: std::path::PathBuf,
+    },
+    /// Run named configurations at equal budgets against a reference: CSV, JSON, plots
+    /// and report.html (a page to open in a browser).
     Experiment {
         /// The experiment file (.toml).
         file: std::path::PathBuf,
-        /// Output folder (default: FILE-results beside the file).
-        #[arg(long)]
+        /// Output folder (default: FILE-results beside the file; when that exists,
+        /// FILE-results-DATE, so results written before are never overwritten).
+        #[arg(short, long)]
         out: Option<std::path::PathBuf>,
         /// No per-run lines.
         #[arg(short, long)]
@@ -110,14 +125,29 @@ pub fn run(cli: Cli) -> Result<(), String> {
             image,
             reference,
             json,
+            map,
+            map_metric,
         } => {
+            if let Some(p) = &map {
+                if crate::image_io::format_of(p) != Ok(crate::image_io::Format::Png) {
+                    return Err(format!(
+                        "--map {}: the error map is written as .png",
+                        p.display()
+                    ));
+                }
+            }
             let x = crate::image_io::read_image(&image)?;
             let y = crate::image_io::read_image(&reference)?;
             // NaN metrics, or a 0x0 "perfect match", would tell the user nothing
             crate::metrics::check_comparable(&x, &image.display().to_string())?;
             crate::metrics::check_comparable(&y, &reference.display().to_string())?;
-            let m = crate::metrics::Metrics::compute(&x, &y)
-                .map_err(|e| format!("{} vs {}: {e}", image.display(), reference.display()))?;
+            let range = crate::metrics::flip::range_of(&[&image, &reference]);
+            let vs = |e: String| format!("{} vs {}: {e}", image.display(), reference.display());
+            let m = crate::metrics::Metrics::compute_range(&x, &y, range).map_err(vs)?;
+            if let Some(p) = &map {
+                let rgb = crate::metrics::error_map(&x, &y, map_metric, range).map_err(vs)?;
+                crate::image_io::write_png_rgb8(p, x.width, x.height, &rgb)?;
+            }
             if json {
                 println!(
                     "{}",
@@ -132,10 +162,16 @@ pub fn run(cli: Cli) -> Result<(), String> {
                     m.perceptual_share * 100.0
                 );
                 println!("luminance ratio   {:.5}", m.luminance_ratio);
+                println!("flip              {:.5} ({}-FLIP)", m.flip, m.flip_range);
             }
             Ok(())
         }
         Command::Experiment { file, out, quiet } => experiment::run(&file, out, quiet),
+        Command::Report { dir } => {
+            let p = crate::report::html::rebuild(&dir)?;
+            eprintln!("kalos: wrote {}", p.display());
+            Ok(())
+        }
         Command::Merge {
             parts,
             output,

@@ -49,6 +49,11 @@ pub struct RenderArgs {
     /// with dask and distributed (`KALOS_PYTHON` names another interpreter).
     #[arg(long, value_name = "ADDRESS")]
     pub dask: Option<String>,
+    /// Stream the image to a running tev viewer as passes finish (tev's address, default
+    /// 127.0.0.1:14158). A viewer that does not answer costs a warning; the render goes on.
+    #[arg(long, value_name = "HOST:PORT", num_args = 0..=1, require_equals = false,
+          default_missing_value = super::tev::DEFAULT_ADDRESS, value_parser = super::tev::parse_address)]
+    pub tev: Option<String>,
     /// With --dask: samples per task (default: two tasks per worker thread).
     #[arg(long, value_name = "N", requires = "dask", value_parser = clap::value_parser!(u32).range(1..))]
     pub dask_chunk_spp: Option<u32>,
@@ -166,7 +171,24 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     }
     install_interrupt_handler();
     let progress = CliProgress::new(a.quiet);
-    let r = crate::render::render(&job, &progress)?;
+    let name = a
+        .output
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_else(|| a.scene.clone());
+    let tev = a
+        .tev
+        .as_deref()
+        .map(|addr| super::tev::TevProgress::connect(&progress, addr, &name));
+    let p: &dyn crate::progress::Progress = match &tev {
+        Some(t) => t,
+        None => &progress,
+    };
+    let r = crate::render::render(&job, p)?;
+    if let Some(t) = &tev {
+        // the finished image (filtered, for the methods that filter)
+        t.send(r.image.width, r.image.height, &r.image.data);
+    }
     for w in &r.warnings {
         say(w);
     }

@@ -200,7 +200,8 @@ pub fn srgb_decode(v: f32) -> f32 {
     }
 }
 
-fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), String> {
+/// 8-bit sRGB rows of a linear image scaled by 2^exposure (as PNGs are written).
+pub fn srgb8(img: &RgbImage, exposure: f32) -> Vec<u8> {
     let k = 2f32.powf(exposure);
     let mut buf = Vec::with_capacity(img.data.len() * 3);
     for p in &img.data {
@@ -208,18 +209,27 @@ fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), String> {
             buf.push((srgb_encode(v * k).clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
         }
     }
-    encode_png(path, img.width, img.height, &buf)
+    buf
 }
 
-/// Encode 8-bit RGB in memory, then one write whose error is seen (image::save_buffer's
-/// BufWriter is flushed on drop, where a full disk goes unnoticed).
-fn encode_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), String> {
+fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), String> {
+    encode_png(path, img.width, img.height, &srgb8(img, exposure))
+}
+
+/// A PNG file's bytes of 8-bit RGB rows, in memory.
+pub fn png_bytes(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, String> {
     use image::ImageEncoder;
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
         .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
         .map_err(|e| e.to_string())?;
-    std::fs::write(path, png).map_err(|e| e.to_string())
+    Ok(png)
+}
+
+/// Encode 8-bit RGB in memory, then one write whose error is seen (image::save_buffer's
+/// BufWriter is flushed on drop, where a full disk goes unnoticed).
+fn encode_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), String> {
+    std::fs::write(path, png_bytes(width, height, rgb)?).map_err(|e| e.to_string())
 }
 
 /// Write 8-bit sRGB pixels (row-major RGB) as a PNG, reporting any write error (plots

@@ -5,11 +5,15 @@
 //! - [`perceptual_error`]: the paper's perceptual measure, the number (and share) of pixels
 //!   whose relative colour error ||x - y|| / ||y|| exceeds 5% (sum-of-abs norm);
 //! - [`luminance_ratio`]: mean Rec.709 luminance of x over that of y (energy bias);
-//! - [`efficiency`]: 1 / (error * seconds).
+//! - [`efficiency`]: 1 / (error * seconds);
+//! - [`flip`]: NVIDIA's perceptual FLIP (LDR for 8-bit images, HDR for radiance), and the
+//!   false-colour maps of it and of [`relative_error_map`].
 //!
 //! All accumulate in f64. Non-finite pixels propagate into the results (NaN), on purpose:
 //! a broken image should not get a good score; [`check_comparable`] refuses such images
 //! (and images without pixels) up front, naming the file, where a user gives them.
+
+pub mod flip;
 
 use crate::image_io::RgbImage;
 use serde::Serialize;
@@ -158,6 +162,54 @@ pub fn luminance_ratio(x: &RgbImage, y: &RgbImage) -> Result<f64, String> {
     Ok(if lx == 0.0 && ly == 0.0 { 1.0 } else { lx / ly })
 }
 
+/// Per-pixel relative colour error of x against y, as [`perceptual_error`] measures it:
+/// ||x - y|| / max(||y||, floor) (row-major; 0.05 is the perceptual threshold).
+pub fn relative_error_map(x: &RgbImage, y: &RgbImage) -> Result<Vec<f32>, String> {
+    check(x, y)?;
+    let n = x.data.len();
+    let mean_norm = y.data.iter().map(|&c| norm(c)).sum::<f64>() / n.max(1) as f64;
+    let floor = PERCEPTUAL_FLOOR * mean_norm;
+    Ok(x.data
+        .iter()
+        .zip(&y.data)
+        .map(|(a, b)| {
+            let d = norm([a[0] - b[0], a[1] - b[1], a[2] - b[2]]);
+            let r = norm(*b).max(floor);
+            if r > 0.0 {
+                (d / r) as f32
+            } else if d > 0.0 {
+                f32::INFINITY
+            } else {
+                0.0
+            }
+        })
+        .collect())
+}
+
+/// Which error a false-colour map shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MapKind {
+    /// FLIP per pixel, 0 to 1.
+    Flip,
+    /// Relative colour error per pixel, 0 to 100%.
+    Relative,
+}
+
+/// The false-colour map (magma, 8-bit sRGB rows) of x against y: FLIP of `range`, or the
+/// relative colour error with 100% and more at the top of the scale.
+pub fn error_map(
+    x: &RgbImage,
+    y: &RgbImage,
+    kind: MapKind,
+    range: flip::Range,
+) -> Result<Vec<u8>, String> {
+    let values = match kind {
+        MapKind::Flip => flip::flip(x, y, range)?.map,
+        MapKind::Relative => relative_error_map(x, y)?,
+    };
+    Ok(values.iter().flat_map(|&v| flip::magma(v)).collect())
+}
+
 /// Efficiency of a method: 1 / (error * seconds), higher is better (error: MSE or
 /// relMSE; seconds: render time).
 pub fn efficiency(mse: f64, seconds: f64) -> f64 {
@@ -177,6 +229,10 @@ pub struct Metrics {
     /// perceptual_count / pixels.
     pub perceptual_share: f64,
     pub luminance_ratio: f64,
+    /// Mean FLIP (0: identical, 1: green against blue), of the dynamic range in `flip_range`.
+    pub flip: f64,
+    /// "LDR" (8-bit images) or "HDR" (radiance): which FLIP `flip` is.
+    pub flip_range: &'static str,
     /// Render time, if known.
     pub seconds: Option<f64>,
     /// 1 / (mse * seconds).
@@ -186,8 +242,17 @@ pub struct Metrics {
 }
 
 impl Metrics {
-    /// Compare test image `x` with reference `y`.
+    /// Compare test image `x` with reference `y` (radiance: HDR-FLIP).
     pub fn compute(x: &RgbImage, y: &RgbImage) -> Result<Metrics, String> {
+        Metrics::compute_range(x, y, flip::Range::Hdr)
+    }
+
+    /// Compare test image `x` with reference `y`, FLIP of the given dynamic range.
+    pub fn compute_range(
+        x: &RgbImage,
+        y: &RgbImage,
+        range: flip::Range,
+    ) -> Result<Metrics, String> {
         let m = mse(x, y)?;
         let (count, share) = perceptual_error(x, y)?;
         Ok(Metrics {
@@ -199,6 +264,8 @@ impl Metrics {
             perceptual_count: count,
             perceptual_share: share,
             luminance_ratio: luminance_ratio(x, y)?,
+            flip: flip::flip(x, y, range)?.mean,
+            flip_range: range.name(),
             seconds: None,
             efficiency: None,
             efficiency_relmse: None,

@@ -490,6 +490,7 @@ pub fn render(
             progress,
         };
         counters.add(&render_pass(&p, film, None));
+        progress.pass_image(set.width, set.height, &|| film.mean_rgb());
     };
     match budget {
         Budget::Spp(n) => {

@@ -1,5 +1,8 @@
 //! Reports: result tables (CSV/JSON), log-log error plots (PNG and SVG, plotters with the
-//! DejaVu Sans font shipped in assets/fonts) and side-by-side crops.
+//! DejaVu Sans font shipped in assets/fonts), side-by-side crops, and the HTML report of
+//! an experiment's results ([`html`]).
+
+pub mod html;
 
 use crate::image_io::{srgb_encode, RgbImage};
 use plotters::coord::Shift;
@@ -18,10 +21,12 @@ fn register_font() {
     });
 }
 
-/// One line of a plot.
+/// One line of a plot: points, and optionally each point's spread (low, high) in y,
+/// drawn as an error bar (the range over seeds).
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
+    pub spread: Vec<(f64, f64)>,
 }
 
 /// One panel of a figure.
@@ -47,30 +52,91 @@ fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo / 1.15, hi * 1.15)
 }
 
+/// Ticks of a log axis over [lo, hi]: 1-2-5 of every decade, thinned to powers of ten
+/// when there are many, 1-2-3-5 or all nine steps when the range holds fewer than three:
+/// every axis gets labels, also one narrower than a decade.
+pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi >= lo && hi.is_finite()) {
+        return vec![];
+    }
+    let of = |ms: &[f64]| -> Vec<f64> {
+        let (e0, e1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        (e0..=e1)
+            .flat_map(|e| ms.iter().map(move |m| m * 10f64.powi(e)))
+            .filter(|v| *v >= lo * (1.0 - 1e-9) && *v <= hi * (1.0 + 1e-9))
+            .collect()
+    };
+    let t = of(&[1.0, 2.0, 5.0]);
+    if t.len() > 10 {
+        return of(&[1.0]);
+    }
+    if t.len() < 3 {
+        for ms in [
+            &[1.0, 2.0, 3.0, 5.0][..],
+            &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+        ] {
+            let more = of(ms);
+            if more.len() >= 3 {
+                return more;
+            }
+        }
+        // narrower than one step: the ends and the middle
+        let mid = (lo * hi).sqrt();
+        return vec![lo, mid, hi];
+    }
+    t
+}
+
+/// An axis label as people write it: "100", "1000", "0.5", "0.025", "2.5e-5".
+pub fn tick_label(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if !(1e-3..1e6).contains(&a) {
+        let s = format!("{v:.1e}");
+        return s.replace(".0e", "e");
+    }
+    // three significant digits, trailing zeros dropped
+    let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     let (x0, x1) = range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0)));
-    let (y0, y1) = range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.1)));
+    let (y0, y1) = range(p.series.iter().flat_map(|s| {
+        s.points
+            .iter()
+            .map(|q| q.1)
+            .chain(s.spread.iter().flat_map(|q| [q.0, q.1]))
+    }));
     let mut chart = ChartBuilder::on(area)
         .caption(&p.title, ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(48)
         .y_label_area_size(72)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+        .build_cartesian_2d(
+            (x0..x1).log_scale().with_key_points(log_ticks(x0, x1)),
+            (y0..y1).log_scale().with_key_points(log_ticks(y0, y1)),
+        )
         .map_err(e)?;
     chart
         .configure_mesh()
-        .x_labels(8)
-        .y_labels(8)
         .x_desc(&p.x_label)
         .y_desc(&p.y_label)
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
-        .x_label_formatter(&|v| format!("{v:.3}"))
-        .y_label_formatter(&|v| format!("{v:.2e}"))
+        .x_label_formatter(&|v| tick_label(*v))
+        .y_label_formatter(&|v| tick_label(*v))
         .draw()
         .map_err(e)?;
     for (i, s) in p.series.iter().enumerate() {
@@ -90,6 +156,16 @@ where
             });
         chart
             .draw_series(pts.iter().map(|&q| Circle::new(q, 4, color.filled())))
+            .map_err(e)?;
+        let bars = s
+            .points
+            .iter()
+            .zip(&s.spread)
+            .filter(|(q, b)| q.0 > 0.0 && b.0 > 0.0 && b.1 > 0.0 && b.1 > b.0);
+        chart
+            .draw_series(bars.map(|(q, b)| {
+                ErrorBar::new_vertical(q.0, b.0, q.1.clamp(b.0, b.1), b.1, color.stroke_width(1), 8)
+            }))
             .map_err(e)?;
     }
     chart
@@ -257,16 +333,23 @@ mod tests {
                 Series {
                     name: "path".into(),
                     points: vec![(1.0, 0.1), (2.0, 0.07), (4.0, 0.05)],
+                    spread: vec![(0.09, 0.11), (0.06, 0.08), (0.045, 0.055)],
                 },
                 Series {
                     name: "dtf".into(),
                     points: vec![(1.0, 0.05), (2.0, 0.035), (4.0, 0.025)],
+                    spread: vec![],
                 },
             ],
         };
         plot_panels(&dir.join("plot"), &[panel]).unwrap();
         let svg = std::fs::read_to_string(dir.join("plot.svg")).unwrap();
         assert!(svg.contains("dtf") && svg.contains("seconds"));
+        // y ticks inside one decade (0.025 .. 0.11 spans no power of ten): labelled
+        // (plotters writes a text element's content on a line of its own)
+        assert!(svg.contains("\n0.05\n") && svg.contains("\n0.1\n"), "{svg}");
+        // x ticks as numbers are written
+        assert!(svg.contains("\n2\n") && !svg.contains("2.000"), "{svg}");
         assert!(std::fs::metadata(dir.join("plot.png")).unwrap().len() > 1000);
         let img = RgbImage::new(4, 4, vec![[0.5, 0.2, 0.1]; 16]);
         let c = crop(&img, [1, 1, 10, 2]);
@@ -281,6 +364,26 @@ mod tests {
         let back = crate::image_io::read_image(&dir.join("tiles.png")).unwrap();
         assert!(back.width > 24);
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn axis_ticks_and_labels_read_as_numbers() {
+        assert_eq!(tick_label(100.0), "100");
+        assert_eq!(tick_label(1000.0), "1000");
+        assert_eq!(tick_label(0.5), "0.5");
+        assert_eq!(tick_label(0.025), "0.025");
+        assert_eq!(tick_label(2.5e-5), "2.5e-5");
+        assert_eq!(tick_label(1e-4), "1e-4");
+        assert_eq!(
+            log_ticks(16.0, 1024.0),
+            vec![20.0, 50.0, 100.0, 200.0, 500.0, 1000.0]
+        );
+        // inside one decade: 1-2-3-5, else the nine steps
+        assert_eq!(log_ticks(0.08, 0.45), vec![0.1, 0.2, 0.30000000000000004]);
+        assert_eq!(log_ticks(0.02, 0.08).len(), 3);
+        assert_eq!(log_ticks(0.06, 0.095).len(), 4);
+        // narrower than a step: still three labels
+        assert_eq!(log_ticks(0.021, 0.029).len(), 3);
     }
 
     /// /dev/full fails every write, as a full disk does: plots and tiles say so.
@@ -300,6 +403,7 @@ mod tests {
             series: vec![Series {
                 name: "a".into(),
                 points: vec![(1.0, 1.0), (2.0, 0.5)],
+                spread: vec![],
             }],
         };
         let e = plot_panels(&dir.join("p"), &[panel]).unwrap_err();
@@ -312,6 +416,7 @@ mod tests {
             series: vec![Series {
                 name: "a".into(),
                 points: vec![(1.0, 1.0), (2.0, 0.5)],
+                spread: vec![],
             }],
         };
         let e = plot_panels(&dir.join("p"), &[panel]).unwrap_err();
