@@ -96,7 +96,7 @@ fn the_report_holds_every_section_and_image_and_is_rebuilt_the_same() {
         !svg.contains(".000\n"),
         "axis labels with needless decimals"
     );
-    assert!(svg.contains("\n10\n"), "the spp axis's 10");
+    assert!(svg.contains("\n5\n"), "the spp axis's 5");
     // `kalos report` rebuilds the same page from the folder
     let out = kalos(&["report", "tiny-results"], &d);
     assert!(
