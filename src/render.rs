@@ -116,7 +116,7 @@ pub struct RenderJob {
     pub seed: u64,
     /// Index of the first sample (a shard of a render takes samples first..first+spp).
     #[arg(long, default_value_t = 0)]
-    pub first_sample: u32,
+    pub first_sample: u64,
     /// Worker threads (default: all cores; capped at 4x the logical CPUs).
     #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
@@ -205,6 +205,14 @@ impl RenderJob {
                 return Err(format!("--time {t}: must be a positive number of seconds"));
             }
         }
+        // the film's sample range first..first + spp is 64-bit; it must not wrap
+        let most = self.spp.unwrap_or(u32::MAX) as u64;
+        if self.first_sample.checked_add(most).is_none() {
+            return Err(format!(
+                "--first-sample {}: samples {}..+{most} would pass the last sample index (2^64 - 1)",
+                self.first_sample, self.first_sample
+            ));
+        }
         if self.method == Method::Dtf {
             self.dtf.validate()?;
         }
@@ -221,7 +229,7 @@ pub struct RenderStats {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
-    pub first_sample: u32,
+    pub first_sample: u64,
     pub seconds: f64,
     pub paths: u64,
     pub rays: u64,
@@ -334,6 +342,21 @@ pub fn render_scene(
     job.validate()?;
     let set = job.settings(scene);
     crate::film::check_resolution(set.width, set.height)?;
+    // DTF's spp budget is the average over both phases: phase 1's n must fit in it
+    // (checked before any work, with the scene's default spp known)
+    if let (Method::Dtf, None) = (job.method, job.time) {
+        let spp = job.spp.or_else(|| {
+            (job.dtf.eps_r.is_none()).then(|| scene.defaults.spp.unwrap_or(DEFAULT_SPP))
+        });
+        if let Some(spp) = spp {
+            let n = job.dtf.n_for(Some(spp as f64), false);
+            if spp < n {
+                return Err(format!(
+                    "--spp {spp}: in DTF budget mode it is the average over both phases and must be at least --dtf-n {n}"
+                ));
+            }
+        }
+    }
     let (pool, thread_warning) = thread_pool(job.threads)?;
     let mut warnings: Vec<String> = thread_warning.into_iter().collect();
     let t_prep = std::time::Instant::now();

@@ -419,7 +419,7 @@ fn render(
     let stats = serde_json::to_string(&r.stats).unwrap_or_default();
     let job_json = serde_json::to_string(&job).unwrap_or_default();
     let film = if job.method == kalos::render::Method::Plain {
-        let first = job.first_sample as u64;
+        let first = job.first_sample;
         let f = FilmFile {
             job: job_json.clone(),
             key: job.key(),

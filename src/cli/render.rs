@@ -172,7 +172,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     }
     if is_film_path(&a.output) {
         let spp = r.stats.spp as u64;
-        let first = job.first_sample as u64;
+        let first = job.first_sample;
         write_film(
             &a.output,
             &FilmFile {
