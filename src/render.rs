@@ -142,9 +142,12 @@ impl RenderJob {
     }
 
     /// What two film parts must share to merge: the job without its sample range,
-    /// budget and threads, as JSON.
-    pub fn key(&self) -> String {
+    /// budget and threads, as JSON, its scene named by the hash of the files it was read
+    /// from (`Scene::content_hash`), not by their path: `s.xml` and `./s.xml` merge, the
+    /// parts of a scene edited between them do not.
+    pub fn key(&self, content_hash: u64) -> String {
         let mut j = self.clone();
+        j.scene = format!("content {content_hash:016x}");
         j.first_sample = 0;
         j.spp = None;
         j.time = None;
@@ -296,6 +299,25 @@ pub struct Rendered {
     pub rw: Option<RwRun>,
     /// Things the user should know (the scene's warnings, capped threads, a black image).
     pub warnings: Vec<String>,
+    /// The film's merge key (`RenderJob::key` of the job and the scene's content).
+    pub key: String,
+}
+
+impl Rendered {
+    /// The film file of a plain render of `job`: its film, job, key and sample range.
+    /// With a time budget the last, partial pass gave some pixels one sample more than
+    /// `stats.spp`; the range holds it.
+    pub fn film_file(&self, job: &RenderJob) -> crate::film::FilmFile {
+        let first = job.first_sample;
+        let most = self.film.pixels.iter().map(|p| p.n).max().unwrap_or(0);
+        let spp = self.stats.spp.max(most) as u64;
+        crate::film::FilmFile {
+            job: serde_json::to_string(job).unwrap_or_default(),
+            key: self.key.clone(),
+            ranges: vec![(first, first + spp)],
+            film: self.film.clone(),
+        }
+    }
 }
 
 /// A thread pool of the requested size, capped at `MAX_THREADS_PER_CPU` x the CPUs.
@@ -569,6 +591,7 @@ pub fn render_scene(
         dtf: dtf_run,
         rw: rw_run,
         warnings,
+        key: job.key(scene.content_hash),
     })
 }
 
@@ -687,9 +710,12 @@ mod tests {
         a.first_sample = 32;
         b.spp = Some(7);
         b.threads = Some(3);
-        assert_eq!(a.key(), b.key());
+        assert_eq!(a.key(7), b.key(7));
+        assert_ne!(a.key(7), b.key(8), "another scene content");
+        b.scene = "./cornell".into();
+        assert_eq!(a.key(7), b.key(7), "the path is not the content");
         b.seed = 1;
-        assert_ne!(a.key(), b.key());
+        assert_ne!(a.key(7), b.key(7));
     }
 }
 /// A filter on a finished image (`--filter`).

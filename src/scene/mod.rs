@@ -266,6 +266,9 @@ pub struct Scene {
     /// The default camera's warning (placed inside a closed room, or seeing no light),
     /// which holds only for renders that use that camera.
     pub camera_warning: Option<String>,
+    /// A hash of the contents of the files the scene was read from ([`load`]; 0 when
+    /// built from a description): film parts of one render share it.
+    pub content_hash: u64,
 }
 
 impl Scene {
@@ -461,6 +464,7 @@ impl Scene {
             info,
             warnings,
             camera_warning,
+            content_hash: 0,
         })
     }
 
@@ -614,8 +618,14 @@ pub fn default_camera(b: &Bounds3) -> CameraDesc {
 /// Mitsuba `.xml` file.
 pub fn load(spec: &str) -> Result<Scene, String> {
     let t0 = Instant::now();
-    let desc = load_desc(spec)?;
-    Scene::build(desc, t0.elapsed().as_secs_f64())
+    let (scene, hash) = crate::input::content_hash_of_reads(|| {
+        let desc = load_desc(spec)?;
+        Scene::build(desc, t0.elapsed().as_secs_f64())
+    });
+    let mut scene = scene?;
+    // a built-in scene reads no file: its name is its content
+    scene.content_hash = hash.unwrap_or_else(|| crate::input::CRC64.checksum(spec.as_bytes()));
+    Ok(scene)
 }
 
 /// Read a scene description without building it.
