@@ -64,7 +64,7 @@ pub struct RenderJob {
     #[arg(long, value_parser = parse_seconds)]
     pub time: Option<f64>,
     /// Resolution WxH (default: the scene's, else 256x256).
-    #[arg(long, value_parser = parse_res)]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_res)]
     pub res: Option<(u32, u32)>,
     /// Camera "ox,oy,oz,tx,ty,tz,ux,uy,uz,fov" (overrides the scene's).
     #[arg(long, allow_hyphen_values = true, value_parser = CameraDesc::parse)]
@@ -216,11 +216,11 @@ impl RenderJob {
                 self.first_sample, self.first_sample
             ));
         }
-        if self.method == Method::Dtf {
-            self.dtf.validate()?;
-        }
-        // (checked whatever the method, so a bad --rw-d is never silently ignored)
+        // (checked whatever the method or estimator, so a bad --rw-d, --dtf-z or
+        // --radiosity-tolerance is never silently ignored)
+        self.dtf.validate()?;
         self.rw.validate()?;
+        self.radiosity.validate()?;
         Ok(())
     }
 }

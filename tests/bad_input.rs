@@ -997,3 +997,8 @@ fn bad_mitsuba_xml_and_ply_give_one_line_errors() {
         assert_one_line_error(name, code, &err, 1, &needles);
     }
 }
+
+#[path = "bad_input/films.rs"]
+mod films;
+#[path = "bad_input/limits.rs"]
+mod limits;

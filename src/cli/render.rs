@@ -175,6 +175,12 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     }
     install_interrupt_handler();
     let progress = CliProgress::new(a.quiet);
+    // DTF's phases do not stop part-way: an interrupt ends the process
+    let progress = if job.method == Method::Dtf {
+        progress.not_stoppable()
+    } else {
+        progress
+    };
     let r = crate::render::render(&job, &progress)?;
     for w in &r.warnings {
         say(w);

@@ -327,9 +327,7 @@ fn check_fields(f: &FilmFile) -> Result<(), String> {
             ));
         }
         let most = p.n as i128 * term;
-        let bad = (0..3).any(|c| {
-            p.sum[c].abs() > most || p.sum_sq[c] < 0 || p.sum_sq[c] > most
-        });
+        let bad = (0..3).any(|c| p.sum[c].abs() > most || p.sum_sq[c] < 0 || p.sum_sq[c] > most);
         if bad {
             return Err(format!(
                 "pixel ({x}, {y}): sums beyond what {} samples add up to",
@@ -378,10 +376,14 @@ fn can_merge(a: &super::Film, b: &super::Film) -> bool {
             })
     });
     let rej = a.rejected.nan.checked_add(b.rejected.nan).is_some()
-        && a.rejected.infinite.checked_add(b.rejected.infinite).is_some();
+        && a.rejected
+            .infinite
+            .checked_add(b.rejected.infinite)
+            .is_some();
     let splats = match (&a.splats, &b.splats) {
         (Some(s), Some(t)) => {
-            let add3 = |u: &[i128; 3], v: &[i128; 3]| (0..3).all(|c| u[c].checked_add(v[c]).is_some());
+            let add3 =
+                |u: &[i128; 3], v: &[i128; 3]| (0..3).all(|c| u[c].checked_add(v[c]).is_some());
             s.light_paths.checked_add(t.light_paths).is_some()
                 && (0..BATCHES).all(|k| s.batch_paths[k].checked_add(t.batch_paths[k]).is_some())
                 && (0..s.sum.len()).all(|i| {

@@ -228,6 +228,9 @@ impl SceneDesc {
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct SceneInfo {
     pub name: String,
+    /// The scene as the user named it: its file's path, or a built-in name ([`load`];
+    /// the description's name when built from one).
+    pub source: String,
     pub triangles: usize,
     pub materials: usize,
     pub emitters: usize,
@@ -428,6 +431,7 @@ impl Scene {
         }
         let info = SceneInfo {
             name: desc.name.clone(),
+            source: desc.name.clone(),
             triangles: desc.positions.len(),
             materials: materials.len(),
             emitters: lights.len(),
@@ -623,6 +627,7 @@ pub fn load(spec: &str) -> Result<Scene, String> {
         Scene::build(desc, t0.elapsed().as_secs_f64())
     });
     let mut scene = scene?;
+    scene.info.source = spec.to_string();
     // a built-in scene reads no file: its name is its content
     scene.content_hash = hash.unwrap_or_else(|| crate::input::CRC64.checksum(spec.as_bytes()));
     Ok(scene)

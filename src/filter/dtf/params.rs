@@ -313,12 +313,12 @@ impl DtfParams {
         }
         if let Some(e) = self.eps_r.filter(|e| !(e.is_finite() && *e > 0.0)) {
             return Err(format!(
-                "--dtf-eps {e}: the relative error must be positive"
+                "--dtf-eps {e:e}: the relative error must be positive"
             ));
         }
         if let Some(e) = self.eps_r.filter(|&e| (e as f64) < MIN_EPS) {
             return Err(format!(
-                "--dtf-eps {e}: below {MIN_EPS} a pixel whose noise is as large as its value needs more than (3 / eps_r)^2 = {:.0e} samples (the paper uses 0.03)",
+                "--dtf-eps {e:e}: below {MIN_EPS:e} a pixel whose noise is as large as its value needs more than (3 / eps_r)^2 = {:.0e} samples (the paper uses 0.03)",
                 (3.0 / MIN_EPS).powi(2)
             ));
         }
