@@ -22,43 +22,31 @@ fn emitters_beyond_single_precision_are_named() {
         "newmtl light\nKd 0 0 0\nKe 3e38 3e38 3e38\nnewmtl w\nKd 0.5 0.5 0.5\n",
     );
     let obj = format!("mtllib l.mtl\n{QUAD}usemtl light\nf 1 2 3 4\nusemtl w\nf 1 3 2\n");
-    let mtl_scene = write(&d, "mtl.obj", obj);
-    let (code, err) = render(&d, &mtl_scene, &[]);
-    assert_one_line_error("mtl Ke", code, &err, 1, &["l.mtl:1", "'light'", "power"]);
-
+    write(&d, "mtl.obj", obj);
     write(&d, "w.mtl", "newmtl w\nKd 0.5 0.5 0.5\n");
     write(
         &d,
         "w.obj",
         format!("mtllib w.mtl\n{QUAD}usemtl w\nf 1 2 3 4\n"),
     );
-    let toml = write(
-        &d,
-        "ke.toml",
-        "[[objects]]\nfile = \"w.obj\"\n\n[materials.w]\nke = [1e38, 1e38, 1e38]\n",
+    let objects = "[[objects]]\nfile = \"w.obj\"\n\n";
+    let ke = format!("{objects}[materials.w]\nke = [1e38, 1e38, 1e38]\n");
+    let point = format!(
+        "{objects}[[point_lights]]\nposition = [0, 0, 1]\nintensity = [1e38, 1e38, 1e38]\n"
     );
-    let (code, err) = render(&d, &toml, &[]);
-    assert_one_line_error(
-        "toml ke",
-        code,
-        &err,
-        1,
-        &["ke.toml:4", "materials.w", "power"],
-    );
-
-    let toml = write(
-        &d,
-        "point.toml",
-        "[[objects]]\nfile = \"w.obj\"\n\n[[point_lights]]\nposition = [0, 0, 1]\nintensity = [1e38, 1e38, 1e38]\n",
-    );
-    let (code, err) = render(&d, &toml, &[]);
-    assert_one_line_error(
-        "point light",
-        code,
-        &err,
-        1,
-        &["point.toml:4", "point light", "power"],
-    );
+    let cases = [
+        ("mtl.obj", None, ["l.mtl:1", "'light'"]),
+        ("ke.toml", Some(ke), ["ke.toml:4", "materials.w"]),
+        ("point.toml", Some(point), ["point.toml:4", "point light"]),
+    ];
+    for (name, text, needles) in cases {
+        let scene = match text {
+            Some(t) => write(&d, name, t),
+            None => d.join(name).to_str().unwrap().to_string(),
+        };
+        let (code, err) = render(&d, &scene, &[]);
+        assert_one_line_error(name, code, &err, 1, &[needles[0], needles[1], "power"]);
+    }
 }
 
 /// CRC-32 (PNG's chunk checksum).

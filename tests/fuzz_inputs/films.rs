@@ -68,6 +68,9 @@ fn flipped_bits_and_truncations_of_a_film_are_refused() {
     }
 }
 
+/// A change to a film's fields.
+type Forgery = Box<dyn Fn(&mut FilmFile)>;
+
 /// Fields no render writes, re-encoded with a valid checksum (what a buggy or hostile
 /// writer could produce): refused when read or when merged.
 #[test]
@@ -79,7 +82,7 @@ fn forged_film_fields_are_refused() {
         f(&mut x);
         decode(&film_to_bytes(&x), "forged")
     };
-    let cases: Vec<(&str, Box<dyn Fn(&mut FilmFile)>)> = vec![
+    let cases: Vec<(&str, Forgery)> = vec![
         ("reversed range", Box::new(|x| x.ranges = vec![(14, 10)])),
         ("empty range", Box::new(|x| x.ranges = vec![(10, 10)])),
         ("no range", Box::new(|x| x.ranges.clear())),
