@@ -981,7 +981,7 @@ fn bad_mitsuba_xml_and_ply_give_one_line_errors() {
         (
             "plyshort.xml",
             format!("{head}{}</scene>", shape("short.ply")),
-            vec!["plyshort.xml:2:", "short.ply: PLY element"],
+            vec!["plyshort.xml:2:", "short.ply:12: PLY element"],
         ),
         (
             "env.xml",
