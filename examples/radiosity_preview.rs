@@ -40,7 +40,7 @@ fn main() -> Result<(), String> {
             let mut c = Counters::default();
             let mut acc = [0.0f32; 3];
             for i in 0..spp {
-                let mut s = SampleStream::new(&cfg, 0, p, i);
+                let mut s = SampleStream::new(&cfg, 0, p, i as u64);
                 let ray = camera_ray(&cam, x, y, &mut s);
                 let l = match gather_spp {
                     None => gather::preview::<3>(&scene, &sol, ray, &mut s, 64, &mut c),

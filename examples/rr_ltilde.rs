@@ -27,7 +27,7 @@ fn main() {
     for y in 0..res {
         for x in 0..res {
             for k in 0..spp {
-                let mut s = SampleStream::new(&cfg, 7, y * res + x, k);
+                let mut s = SampleStream::new(&cfg, 7, y * res + x, k as u64);
                 let ray = kalos::integrator::camera_ray(&cam, x, y, &mut s);
                 let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
                     continue;
@@ -41,7 +41,7 @@ fn main() {
                 s.set_dimension(200);
                 let wi = Frame::from_normal(ng).to_world(square_to_cosine_hemisphere(s.next_2d()));
                 let r = Ray::new(offset_origin(hit.p, ng, wi), wi);
-                let mut s2 = SampleStream::new(&cfg, 8, y * res + x, k);
+                let mut s2 = SampleStream::new(&cfg, 8, y * res + x, k as u64);
                 let l = path::radiance::<3>(
                     &scene,
                     r,

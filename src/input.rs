@@ -6,6 +6,7 @@
 //! UTF-8 byte-order mark is dropped and old-Mac CR-only line ends become line ends.
 
 use std::borrow::Cow;
+use std::cell::RefCell;
 use std::io::Read;
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -174,7 +175,38 @@ pub fn read_bytes_limited(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
 /// Read a whole regular file within the input limit ([`max_input_bytes`]). Every file
 /// kalos reads goes through here.
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>, String> {
-    read_bytes_limited(path, max_input_bytes()?)
+    let bytes = read_bytes_limited(path, max_input_bytes()?)?;
+    RECORDED.with(|r| {
+        if let Some(d) = r.borrow_mut().as_mut() {
+            d.update(&(bytes.len() as u64).to_le_bytes());
+            d.update(&CRC64.checksum(&bytes).to_le_bytes());
+        }
+    });
+    Ok(bytes)
+}
+
+/// CRC-64 (ECMA-182, as xz uses it): detects every error of up to 64 consecutive bits,
+/// so every single-bit flip; kalos's checksum of film files and of the inputs a render
+/// read.
+pub static CRC64: crc::Crc<u64, crc::Table<16>> =
+    crc::Crc::<u64, crc::Table<16>>::new(&crc::CRC_64_XZ);
+
+thread_local! {
+    /// While [`content_hash_of_reads`] runs: the hash of the files read so far.
+    static RECORDED: RefCell<Option<crc::Digest<'static, u64, crc::Table<16>>>> =
+        const { RefCell::new(None) };
+}
+
+/// Run `f` and hash the contents of every file it reads through [`read_bytes`] on this
+/// thread, in order (sizes and CRC-64s): two loads that read the same bytes from
+/// whatever paths give the same hash. None if `f` read no file.
+pub fn content_hash_of_reads<T>(f: impl FnOnce() -> T) -> (T, Option<u64>) {
+    let outer = RECORDED.with(|r| r.borrow_mut().replace(CRC64.digest()));
+    let out = f();
+    let d = RECORDED.with(|r| std::mem::replace(&mut *r.borrow_mut(), outer));
+    let empty = CRC64.digest().finalize();
+    let h = d.map(|d| d.finalize()).filter(|&h| h != empty);
+    (out, h)
 }
 
 /// Read a text file as UTF-8 (invalid bytes replaced, as OBJ and MTL files from old tools

@@ -64,7 +64,7 @@ pub struct RenderJob {
     #[arg(long, value_parser = parse_seconds)]
     pub time: Option<f64>,
     /// Resolution WxH (default: the scene's, else 256x256).
-    #[arg(long, value_parser = parse_res)]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_res)]
     pub res: Option<(u32, u32)>,
     /// Camera "ox,oy,oz,tx,ty,tz,ux,uy,uz,fov" (overrides the scene's).
     #[arg(long, allow_hyphen_values = true, value_parser = CameraDesc::parse)]
@@ -116,7 +116,7 @@ pub struct RenderJob {
     pub seed: u64,
     /// Index of the first sample (a shard of a render takes samples first..first+spp).
     #[arg(long, default_value_t = 0)]
-    pub first_sample: u32,
+    pub first_sample: u64,
     /// Worker threads (default: all cores; capped at 4x the logical CPUs).
     #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
@@ -142,9 +142,12 @@ impl RenderJob {
     }
 
     /// What two film parts must share to merge: the job without its sample range,
-    /// budget and threads, as JSON.
-    pub fn key(&self) -> String {
+    /// budget and threads, as JSON, its scene named by the hash of the files it was read
+    /// from (`Scene::content_hash`), not by their path: `s.xml` and `./s.xml` merge, the
+    /// parts of a scene edited between them do not.
+    pub fn key(&self, content_hash: u64) -> String {
         let mut j = self.clone();
+        j.scene = format!("content {content_hash:016x}");
         j.first_sample = 0;
         j.spp = None;
         j.time = None;
@@ -205,11 +208,19 @@ impl RenderJob {
                 return Err(format!("--time {t}: must be a positive number of seconds"));
             }
         }
-        if self.method == Method::Dtf {
-            self.dtf.validate()?;
+        // the film's sample range first..first + spp is 64-bit; it must not wrap
+        let most = self.spp.unwrap_or(u32::MAX) as u64;
+        if self.first_sample.checked_add(most).is_none() {
+            return Err(format!(
+                "--first-sample {}: samples {}..+{most} would pass the last sample index (2^64 - 1)",
+                self.first_sample, self.first_sample
+            ));
         }
-        // (checked whatever the method, so a bad --rw-d is never silently ignored)
+        // (checked whatever the method or estimator, so a bad --rw-d, --dtf-z or
+        // --radiosity-tolerance is never silently ignored)
+        self.dtf.validate()?;
         self.rw.validate()?;
+        self.radiosity.validate()?;
         Ok(())
     }
 }
@@ -221,7 +232,7 @@ pub struct RenderStats {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
-    pub first_sample: u32,
+    pub first_sample: u64,
     pub seconds: f64,
     pub paths: u64,
     pub rays: u64,
@@ -288,6 +299,25 @@ pub struct Rendered {
     pub rw: Option<RwRun>,
     /// Things the user should know (the scene's warnings, capped threads, a black image).
     pub warnings: Vec<String>,
+    /// The film's merge key (`RenderJob::key` of the job and the scene's content).
+    pub key: String,
+}
+
+impl Rendered {
+    /// The film file of a plain render of `job`: its film, job, key and sample range.
+    /// With a time budget the last, partial pass gave some pixels one sample more than
+    /// `stats.spp`; the range holds it.
+    pub fn film_file(&self, job: &RenderJob) -> crate::film::FilmFile {
+        let first = job.first_sample;
+        let most = self.film.pixels.iter().map(|p| p.n).max().unwrap_or(0);
+        let spp = self.stats.spp.max(most) as u64;
+        crate::film::FilmFile {
+            job: serde_json::to_string(job).unwrap_or_default(),
+            key: self.key.clone(),
+            ranges: vec![(first, first + spp)],
+            film: self.film.clone(),
+        }
+    }
 }
 
 /// A thread pool of the requested size, capped at `MAX_THREADS_PER_CPU` x the CPUs.
@@ -334,6 +364,21 @@ pub fn render_scene(
     job.validate()?;
     let set = job.settings(scene);
     crate::film::check_resolution(set.width, set.height)?;
+    // DTF's spp budget is the average over both phases: phase 1's n must fit in it
+    // (checked before any work, with the scene's default spp known)
+    if let (Method::Dtf, None) = (job.method, job.time) {
+        let spp = job.spp.or_else(|| {
+            (job.dtf.eps_r.is_none()).then(|| scene.defaults.spp.unwrap_or(DEFAULT_SPP))
+        });
+        if let Some(spp) = spp {
+            let n = job.dtf.n_for(Some(spp as f64), false);
+            if spp < n {
+                return Err(format!(
+                    "--spp {spp}: in DTF budget mode it is the average over both phases and must be at least --dtf-n {n}"
+                ));
+            }
+        }
+    }
     let (pool, thread_warning) = thread_pool(job.threads)?;
     let mut warnings: Vec<String> = thread_warning.into_iter().collect();
     let t_prep = std::time::Instant::now();
@@ -546,6 +591,7 @@ pub fn render_scene(
         dtf: dtf_run,
         rw: rw_run,
         warnings,
+        key: job.key(scene.content_hash),
     })
 }
 
@@ -664,9 +710,12 @@ mod tests {
         a.first_sample = 32;
         b.spp = Some(7);
         b.threads = Some(3);
-        assert_eq!(a.key(), b.key());
+        assert_eq!(a.key(7), b.key(7));
+        assert_ne!(a.key(7), b.key(8), "another scene content");
+        b.scene = "./cornell".into();
+        assert_eq!(a.key(7), b.key(7), "the path is not the content");
         b.seed = 1;
-        assert_ne!(a.key(), b.key());
+        assert_ne!(a.key(7), b.key(7));
     }
 }
 /// A filter on a finished image (`--filter`).

@@ -981,7 +981,7 @@ fn bad_mitsuba_xml_and_ply_give_one_line_errors() {
         (
             "plyshort.xml",
             format!("{head}{}</scene>", shape("short.ply")),
-            vec!["plyshort.xml:2:", "short.ply: PLY element"],
+            vec!["plyshort.xml:2:", "short.ply:12: PLY element"],
         ),
         (
             "env.xml",
@@ -997,3 +997,8 @@ fn bad_mitsuba_xml_and_ply_give_one_line_errors() {
         assert_one_line_error(name, code, &err, 1, &needles);
     }
 }
+
+#[path = "bad_input/films.rs"]
+mod films;
+#[path = "bad_input/limits.rs"]
+mod limits;

@@ -592,3 +592,6 @@ fn mutated_ply_never_panics() {
     }
     assert!((20..=380).contains(&loaded), "{loaded} of 400 loaded");
 }
+
+#[path = "fuzz_inputs/films.rs"]
+mod films;

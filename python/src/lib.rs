@@ -419,13 +419,7 @@ fn render(
     let stats = serde_json::to_string(&r.stats).unwrap_or_default();
     let job_json = serde_json::to_string(&job).unwrap_or_default();
     let film = if job.method == kalos::render::Method::Plain {
-        let first = job.first_sample as u64;
-        let f = FilmFile {
-            job: job_json.clone(),
-            key: job.key(),
-            ranges: vec![(first, first + r.stats.spp as u64)],
-            film: r.film,
-        };
+        let f = r.film_file(&job);
         Some(Py::new(py, NativeFilm { f })?)
     } else {
         None
@@ -685,7 +679,7 @@ fn render_dtf_part<'py>(
                 };
             let file = |film| FilmFile {
                 job: serde_json::to_string(&job).unwrap_or_default(),
-                key: job.key(),
+                key: job.key(sc.content_hash),
                 ranges: vec![(first, end)],
                 film,
             };

@@ -147,6 +147,22 @@ const OWN_OPTIONS: &[(&str, &str)] = &[
     ),
     ("--quiet", "the experiment"),
     ("-q", "the experiment"),
+    (
+        "--output",
+        "the experiment (every run's images go to its output folder, --out)",
+    ),
+    (
+        "-o",
+        "the experiment (every run's images go to its output folder, --out)",
+    ),
+    (
+        "--stats",
+        "the experiment (its CSV and JSON hold every run's statistics)",
+    ),
+    (
+        "--dask",
+        "the experiment (it renders every run in this process)",
+    ),
 ];
 
 /// Refuse an option of `OWN_OPTIONS` in `options` (`what` names where they come from);
@@ -154,7 +170,9 @@ const OWN_OPTIONS: &[(&str, &str)] = &[
 fn refuse_own_options(options: &str, what: &str, allowed: &[&str]) -> Result<(), String> {
     for w in words(options) {
         for &(opt, owner) in OWN_OPTIONS {
-            let given = w == opt || (opt.starts_with("--") && w.starts_with(&format!("{opt}=")));
+            let given = w == opt
+                || (opt.starts_with("--") && w.starts_with(&format!("{opt}=")))
+                || (opt.len() == 2 && !w.starts_with("--") && w.starts_with(opt));
             if given && !allowed.contains(&opt) {
                 return Err(format!(
                     "{what}: options: {opt} is set by {owner}: remove it from the options"
@@ -186,6 +204,11 @@ fn validate(
 ) -> Result<Plan, String> {
     if ex.configs.is_empty() {
         return Err(format!("{fname}: no [[config]]"));
+    }
+    if let Some(e) = ex.exposure.filter(|e| !e.is_finite()) {
+        return Err(format!(
+            "{fname}: exposure = {e}: must be a finite number of stops"
+        ));
     }
     // names: each config's images are written under its name
     for (i, c) in ex.configs.iter().enumerate() {

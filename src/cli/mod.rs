@@ -89,26 +89,49 @@ pub enum Command {
     },
 }
 
-/// Parse the command line. A bad option value (`--res abc`, `--max-depth 0`) is reported
-/// on one line, `kalos: error: invalid value 'abc' for '--res <RES>': ...`, exit code 2;
-/// other usage errors (unknown options, with clap's tip), help and version are clap's own.
+/// Parse the command line. Every usage error is reported on one line, `kalos: error:
+/// ...` (clap's tip, if any, after a semicolon), exit code 2; negative numbers are
+/// taken as values, so `--spp -1` is refused by the option's own check. Help and
+/// version are clap's own.
 pub fn parse_args() -> Cli {
-    use clap::error::ErrorKind;
-    match Cli::try_parse() {
+    fn negatives_as_values(c: clap::Command) -> clap::Command {
+        c.allow_negative_numbers(true)
+            .mut_subcommands(negatives_as_values)
+    }
+    let cmd = negatives_as_values(<Cli as clap::CommandFactory>::command());
+    let parsed = cmd
+        .try_get_matches()
+        .and_then(|m| <Cli as clap::FromArgMatches>::from_arg_matches(&m));
+    match parsed {
         Ok(cli) => cli,
         Err(e)
-            if matches!(
-                e.kind(),
-                ErrorKind::InvalidValue | ErrorKind::ValueValidation
-            ) =>
+            if e.use_stderr()
+                && e.kind() != clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand =>
         {
-            let text = e.render().to_string();
-            let first = text.lines().next().unwrap_or_default();
-            eprintln!("kalos: error: {}", first.trim_start_matches("error: "));
+            eprintln!("kalos: error: {}", one_line(&e.render().to_string()));
             std::process::exit(2);
         }
         Err(e) => e.exit(),
     }
+}
+
+/// clap's several-line error text as one line: the error, then its tips; the usage and
+/// the pointer to --help dropped.
+pub fn one_line(text: &str) -> String {
+    let mut out = String::new();
+    for l in text.lines().map(str::trim) {
+        if l.starts_with("Usage:") || l.starts_with("For more information") {
+            break;
+        }
+        if l.is_empty() {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(if out.ends_with(':') { " " } else { "; " });
+        }
+        out.push_str(l.trim_start_matches("error: "));
+    }
+    out
 }
 
 /// Run the CLI; Err is a one-line message for stderr.
@@ -196,6 +219,12 @@ pub fn run(cli: Cli) -> Result<(), String> {
                 println!("materials    {}", i.materials);
                 println!("emitters     {} triangles", i.emitters);
                 println!("skipped      {} zero-area faces", i.skipped_degenerate);
+                if i.skipped_nonfinite > 0 {
+                    println!(
+                        "skipped      {} faces with coordinates or area not finite",
+                        i.skipped_nonfinite
+                    );
+                }
                 println!(
                     "bounds       [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]",
                     i.bounds_min[0],

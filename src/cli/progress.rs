@@ -1,6 +1,8 @@
 //! The CLI's `Progress`: an indicatif bar on a terminal; on a pipe or a log file (farm
 //! jobs) a line every 5% or 10 s with the rate and the time left; Ctrl-C and SIGTERM
-//! stop the render at the next row, and what was rendered is written.
+//! stop the render at the next row, and what was rendered is written. Outside a stage
+//! that stops so (loading the scene, preparing, DTF's phases) they end the process at
+//! once with a message, and a render that has not stopped 10 s after them is ended too.
 
 use crate::pipeline::Progress;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -11,6 +13,11 @@ use std::time::Instant;
 
 /// Set by the Ctrl-C / SIGTERM handler.
 static STOP: AtomicBool = AtomicBool::new(false);
+/// Whether the work under way stops at an interrupt and writes what it has (a stage of
+/// a `CliProgress` made `stoppable`, between its `begin` and `finish`).
+static STOPPABLE: AtomicBool = AtomicBool::new(false);
+/// How long a stoppable stage may take to stop before the process ends anyway.
+const STOP_GRACE_SECONDS: u64 = 10;
 static HANDLER: OnceLock<()> = OnceLock::new();
 
 /// Install the Ctrl-C / SIGTERM handler once (the first asks the render to stop; a
@@ -27,7 +34,20 @@ pub fn install_handler(what: &'static str) {
                 eprintln!("\nkalos: interrupted twice, exiting without writing");
                 std::process::exit(130);
             }
+            if !STOPPABLE.load(Ordering::SeqCst) {
+                eprintln!(
+                    "\nkalos: interrupted outside a stage that can stop and write what it has (loading the scene, preparing, DTF's phases): exiting without writing"
+                );
+                std::process::exit(130);
+            }
             eprintln!("\nkalos: interrupted: {what}");
+            std::thread::spawn(|| {
+                std::thread::sleep(std::time::Duration::from_secs(STOP_GRACE_SECONDS));
+                eprintln!(
+                    "kalos: interrupted: the work did not stop within {STOP_GRACE_SECONDS} s, exiting without writing"
+                );
+                std::process::exit(130);
+            });
         });
     });
 }
@@ -40,6 +60,8 @@ pub fn interrupted() -> bool {
 pub struct CliProgress {
     bar: Option<ProgressBar>,
     quiet: bool,
+    /// Its stages stop at an interrupt (they poll `cancelled`).
+    stoppable: bool,
     /// The stage's start and unit.
     stage: Mutex<(Instant, String)>,
     total: AtomicU64,
@@ -64,11 +86,20 @@ impl CliProgress {
         CliProgress {
             bar,
             quiet,
+            stoppable: true,
             stage: Mutex::new((Instant::now(), "samples".into())),
             total: AtomicU64::new(0),
             done: AtomicU64::new(0),
             last: Mutex::new((0, 0.0)),
         }
+    }
+}
+
+impl CliProgress {
+    /// Stages of work that does not stop part-way (DTF): an interrupt ends the process.
+    pub fn not_stoppable(mut self) -> CliProgress {
+        self.stoppable = false;
+        self
     }
 }
 
@@ -95,6 +126,7 @@ pub fn rate(per_second: f64, unit: &str) -> String {
 
 impl Progress for CliProgress {
     fn begin(&self, unit: &str, total: u64) {
+        STOPPABLE.store(self.stoppable, Ordering::SeqCst);
         *self.stage.lock().unwrap_or_else(|e| e.into_inner()) = (Instant::now(), unit.to_string());
         self.done.store(0, Ordering::Relaxed);
         *self.last.lock().unwrap_or_else(|e| e.into_inner()) = (0, 0.0);
@@ -153,6 +185,7 @@ impl Progress for CliProgress {
     }
 
     fn finish(&self) {
+        STOPPABLE.store(false, Ordering::SeqCst);
         if let Some(b) = &self.bar {
             b.finish_and_clear();
         }

@@ -2,7 +2,7 @@
 //! output: image (or film file), AOV layers, DTF layers and statistics.
 
 use super::progress::{install_handler, install_interrupt_handler, interrupted, rate, CliProgress};
-use crate::film::{write_film, Film, FilmFile};
+use crate::film::{write_film, Film};
 use crate::image_io::{write_image, write_image_aovs, RgbImage};
 use crate::render::{Method, RenderJob};
 use clap::Args;
@@ -82,7 +82,16 @@ pub fn check_outputs(a: &RenderArgs) -> Result<Vec<String>, String> {
     if !is_film_path(&a.output) {
         crate::image_io::format_of(&a.output).map_err(|e| format!("-o/--output: {e}"))?;
     } else if a.job.method != Method::Plain {
-        return Err("-o/--output: a .kfilm film file holds a plain render's samples; --method dtf writes images only".into());
+        return Err(format!(
+            "-o/--output: a .kfilm film file holds a plain render's samples; --method {} writes images only",
+            crate::options::name(&a.job.method)
+        ));
+    } else if let Some(f) = a.job.post_filter {
+        return Err(format!(
+            "--filter {}: a .kfilm film file holds the unfiltered samples; write an image, or filter the merged image with `kalos filter {}`",
+            crate::options::name(&f),
+            crate::options::name(&f)
+        ));
     }
     if !a.exposure.is_finite() {
         return Err(format!(
@@ -171,6 +180,12 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     }
     install_interrupt_handler();
     let progress = CliProgress::new(a.quiet);
+    // DTF's phases do not stop part-way: an interrupt ends the process
+    let progress = if job.method == Method::Dtf {
+        progress.not_stoppable()
+    } else {
+        progress
+    };
     let name = a
         .output
         .file_name()
@@ -193,17 +208,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         say(w);
     }
     if is_film_path(&a.output) {
-        let spp = r.stats.spp as u64;
-        let first = job.first_sample as u64;
-        write_film(
-            &a.output,
-            &FilmFile {
-                job: serde_json::to_string(&job).map_err(|e| e.to_string())?,
-                key: job.key(),
-                ranges: vec![(first, first + spp)],
-                film: r.film.clone(),
-            },
-        )?;
+        write_film(&a.output, &r.film_file(&job))?;
     } else {
         write_output(&a.output, &r.image, &r.film, a.exposure, a.aovs)?;
     }

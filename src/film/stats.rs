@@ -11,7 +11,7 @@ pub const FIXED: f64 = (1u64 << 40) as f64;
 /// which still marks their pixel as far from converged; the mean stays exact.
 pub const FIXED_SQ: f64 = (1u64 << 56) as f64;
 /// Largest single term, so 2^32 of them never overflow an i128.
-const TERM_MAX: f64 = 1.9e28; // < 2^94 = 1.98e28
+pub const TERM_MAX: f64 = 1.9e28; // < 2^94 = 1.98e28
 
 #[inline]
 fn fixed(x: f64, scale: f64) -> i128 {

@@ -239,10 +239,38 @@ pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Resul
         .map_err(|e| format!("{}: cannot write image: {e}", path.display()))
 }
 
-/// Largest number of pixels an image read may have: the input limit over 12 bytes (one
-/// f32 RGB pixel), so no header can make kalos allocate more than that limit.
+/// Bytes a decoded pixel can take on its way to linear RGB: the decoder's buffer (up to
+/// 16-bit RGBA, 8), its f32 RGB conversion (12) and the image kalos keeps (12).
+const DECODED_PIXEL_BYTES: u64 = 32;
+
+/// Largest number of pixels an image read may have: the input limit over the bytes a
+/// decoded pixel takes, so no header (a small PNG can declare 13000 x 13000) can make
+/// kalos allocate more than that limit. Checked before decoding.
 fn max_pixels() -> Result<u64, String> {
-    Ok(crate::input::max_input_bytes()? / 12)
+    Ok(crate::input::max_input_bytes()? / DECODED_PIXEL_BYTES)
+}
+
+/// Refuse an image of `w` x `h` beyond [`max_pixels`], before it is decoded.
+fn check_pixels(w: u64, h: u64) -> Result<(), String> {
+    let limit = max_pixels()?;
+    if w.saturating_mul(h) > limit {
+        return Err(format!(
+            "the image is {w}x{h}: decoding it would take {}, more than the input limit allows ({limit} pixels; set {} to raise it)",
+            crate::input::human_size(w.saturating_mul(h).saturating_mul(DECODED_PIXEL_BYTES)),
+            crate::input::MAX_INPUT_ENV
+        ));
+    }
+    Ok(())
+}
+
+/// The largest layer of an EXR, from its header alone, checked by [`check_pixels`].
+fn check_exr_size(bytes: &[u8]) -> Result<(), String> {
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| e.to_string())?;
+    for h in &meta.headers {
+        check_pixels(h.layer_size.width() as u64, h.layer_size.height() as u64)?;
+    }
+    Ok(())
 }
 
 /// Decode an 8-bit image held in memory (PNG, JPEG, TGA, BMP), within the image crate's
@@ -250,15 +278,21 @@ fn max_pixels() -> Result<u64, String> {
 /// the file's extension (TGA has no signature; older game-asset scenes such as Crytek's
 /// original Sponza ship `.tga` textures).
 pub fn decode_8bit(bytes: &[u8], ext: Option<&str>) -> Result<image::DynamicImage, String> {
-    let mut r = image::ImageReader::new(std::io::Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| e.to_string())?;
-    if r.format().is_none() {
-        if let Some(f) = ext.and_then(image::ImageFormat::from_extension) {
-            r.set_format(f);
+    let reader = || -> Result<_, String> {
+        let mut r = image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| e.to_string())?;
+        if r.format().is_none() {
+            if let Some(f) = ext.and_then(image::ImageFormat::from_extension) {
+                r.set_format(f);
+            }
         }
-    }
-    r.decode().map_err(|e| e.to_string())
+        Ok(r)
+    };
+    // the size from the header, before anything is allocated for the pixels
+    let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
+    check_pixels(w as u64, h as u64)?;
+    reader()?.decode().map_err(|e| e.to_string())
 }
 
 /// Whether `path` names an image `read_image` reads: EXR, PFM, PNG, or Radiance HDR
@@ -287,11 +321,12 @@ pub fn read_image(path: &Path) -> Result<RgbImage, String> {
     let fail = |e: &dyn std::fmt::Display| format!("{}: cannot read image: {e}", path.display());
     if is_hdr(path) {
         let bytes = crate::input::read_bytes(path)?;
-        let im =
+        let hdr = || {
             image::ImageReader::with_format(std::io::Cursor::new(&bytes), image::ImageFormat::Hdr)
-                .decode()
-                .map_err(|e| fail(&e))?
-                .to_rgb32f();
+        };
+        let (w, h) = hdr().into_dimensions().map_err(|e| fail(&e))?;
+        check_pixels(w as u64, h as u64).map_err(|e| fail(&e))?;
+        let im = hdr().decode().map_err(|e| fail(&e))?.to_rgb32f();
         let (w, h) = im.dimensions();
         if w == 0 || h == 0 {
             return Err(format!(
@@ -330,6 +365,7 @@ pub fn read_image(path: &Path) -> Result<RgbImage, String> {
 
 fn read_exr(bytes: &[u8]) -> Result<RgbImage, String> {
     use exr::prelude::traits::*;
+    check_exr_size(bytes)?;
     let limit = max_pixels()?;
     // the header's size is checked before the pixels are allocated
     let image = exr::prelude::read()
@@ -452,6 +488,7 @@ pub fn read_exr_channels(path: &Path, names: &[&str]) -> Result<(u32, u32, Vec<V
         return Err(format!("{}: not an EXR file", path.display()));
     }
     let bytes = crate::input::read_bytes(path)?;
+    check_exr_size(&bytes).map_err(|e| format!("{}: cannot read image: {e}", path.display()))?;
     let limit = max_pixels()?;
     let image = read()
         .no_deep_data()

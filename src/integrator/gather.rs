@@ -517,7 +517,7 @@ mod tests {
             for x in 0..w {
                 let p = y * w + x;
                 for i in 0..spp {
-                    let mut s = SampleStream::new(&cfg, 0, p, i);
+                    let mut s = SampleStream::new(&cfg, 0, p, i as u64);
                     let ray = camera_ray(&cam, x, y, &mut s);
                     px[p as usize].push(f(ray, &mut s, &mut c));
                 }

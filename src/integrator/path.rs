@@ -652,7 +652,7 @@ mod tests {
         let jobs: Vec<(u32, u32, u32)> = (0..w * h)
             .flat_map(|p| (0..spp).map(move |i| (p % w, p / w, i)))
             .collect();
-        let stream = |&(x, y, i): &(u32, u32, u32)| SampleStream::new(&cfg, 0, y * w + x, i);
+        let stream = |&(x, y, i): &(u32, u32, u32)| SampleStream::new(&cfg, 0, y * w + x, i as u64);
         let bits = |v: Spectrum<N>| v.to_rgb().map(f32::to_bits);
         let mut c = Counters::default();
         let one: Vec<u32> = jobs

@@ -85,6 +85,55 @@ pub enum Chosen {
     Env(f32),
 }
 
+/// An emitter whose power (radiance x area x pi for an area light, 4 pi x intensity for
+/// a point light, the environment's share) is not a finite single-precision number: the
+/// choice among lights by power would be undefined (an infinite weight leaves every
+/// other light unchosen), so the scene is refused.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TooBright {
+    /// The area light of material `material`, with its power (f64).
+    Area { material: u32, power: f64 },
+    /// Point light `index` of the scene's list.
+    Point { index: usize, power: f64 },
+    /// The environment.
+    Env { power: f64 },
+    /// All area lights together.
+    Total { power: f64 },
+}
+
+impl TooBright {
+    /// What is wrong, for a message that names the emitter in front of it.
+    pub fn describe(&self) -> String {
+        let p = match self {
+            TooBright::Area { power, .. }
+            | TooBright::Point { power, .. }
+            | TooBright::Env { power }
+            | TooBright::Total { power } => *power,
+        };
+        let what = match self {
+            TooBright::Area { .. } => "its emitted power (radiance x area x pi)",
+            TooBright::Point { .. } => "its emitted power (4 pi x intensity)",
+            TooBright::Env { .. } => "its power through the scene",
+            TooBright::Total { .. } => "the area lights' total power",
+        };
+        format!(
+            "{what} is {p:.3e}, beyond the single-precision range ({:.3e}): scale the emission down",
+            f32::MAX
+        )
+    }
+}
+
+/// Luminance in double precision (no overflow), at least 0.
+fn luminance64(c: [f32; 3]) -> f64 {
+    let w = crate::spectrum::LUMINANCE_RGB;
+    (w[0] as f64 * c[0] as f64 + w[1] as f64 * c[1] as f64 + w[2] as f64 * c[2] as f64).max(0.0)
+}
+
+/// A light's power must be a finite f32 (`TooBright`).
+fn finite_power(p: f64) -> bool {
+    p.is_finite() && p <= f32::MAX as f64
+}
+
 pub struct Lights {
     lights: Vec<AreaLight>,
     dist: Distribution1D,
@@ -100,7 +149,13 @@ pub struct Lights {
 }
 
 impl Lights {
-    pub fn new(tris: &[[Vec3; 3]], tri_material: &[u32], materials: &[Material]) -> Lights {
+    /// The area lights of a scene: one per emissive triangle of positive area. An
+    /// emitter whose power overflows is refused (`TooBright`).
+    pub fn new(
+        tris: &[[Vec3; 3]],
+        tri_material: &[u32],
+        materials: &[Material],
+    ) -> Result<Lights, TooBright> {
         let mut lights = Vec::new();
         let mut light_of_tri = vec![u32::MAX; tris.len()];
         for (i, t) in tris.iter().enumerate() {
@@ -127,15 +182,26 @@ impl Lights {
                 table: m.emission_table.clone(),
             });
         }
-        let power: Vec<f32> = lights
-            .iter()
-            .map(|l| {
+        let mut power: Vec<f32> = Vec::with_capacity(lights.len());
+        let mut total = 0.0f64;
+        for l in &lights {
+            // in f64, so that an overflow is seen rather than taken as infinity
+            let p = luminance64(l.le) * l.area as f64 * std::f64::consts::PI;
+            if !finite_power(p) {
+                let material = tri_material[l.tri as usize];
+                return Err(TooBright::Area { material, power: p });
+            }
+            total += p;
+            power.push(
                 crate::spectrum::Spectrum::<3>(l.le).luminance().max(1e-9)
                     * l.area
-                    * std::f32::consts::PI
-            })
-            .collect();
-        Lights {
+                    * std::f32::consts::PI,
+            );
+        }
+        if !finite_power(total) {
+            return Err(TooBright::Total { power: total });
+        }
+        Ok(Lights {
             dist: Distribution1D::new(&power),
             lights,
             light_of_tri,
@@ -143,18 +209,43 @@ impl Lights {
             env: None,
             kinds: None,
             p_area: 1.0,
-        }
+        })
     }
 
     /// Add point lights and an environment to the area lights; `radius` is the radius of
     /// the scene's bounding sphere (for the environment's share of the choice).
-    pub fn add_distant(&mut self, points: Vec<PointLight>, env: Option<EnvLight>, radius: f32) {
+    /// A light whose power overflows is refused (`TooBright`), as are the lights together.
+    pub fn add_distant(
+        &mut self,
+        points: Vec<PointLight>,
+        env: Option<EnvLight>,
+        radius: f32,
+    ) -> Result<(), TooBright> {
+        let mut total = self.dist.total();
+        for (index, p) in points.iter().enumerate() {
+            let power = 4.0 * std::f64::consts::PI * luminance64(p.intensity);
+            if !finite_power(power) {
+                return Err(TooBright::Point { index, power });
+            }
+            total += power;
+        }
+        if let Some(e) = &env {
+            let r = radius.max(1e-3) as f64;
+            let power = std::f64::consts::PI.powi(2) * r * r * e.mean_luminance as f64;
+            if !finite_power(power) {
+                return Err(TooBright::Env { power });
+            }
+            total += power;
+        }
+        if !finite_power(total) {
+            return Err(TooBright::Total { power: total });
+        }
         self.points = points;
         self.env = env;
         if self.points.is_empty() && self.env.is_none() {
             self.kinds = None;
             self.p_area = 1.0;
-            return;
+            return Ok(());
         }
         let lum = |c: [f32; 3]| crate::spectrum::Spectrum::<3>(c).luminance().max(0.0);
         let mut w = vec![self.dist.total() as f32];
@@ -168,6 +259,7 @@ impl Lights {
         let kinds = Distribution1D::new(&w);
         self.p_area = if kinds.is_empty() { 0.0 } else { kinds.pmf(0) };
         self.kinds = Some(kinds);
+        Ok(())
     }
 
     /// Point lights.
@@ -338,7 +430,7 @@ mod tests {
             ],
         ];
         let mats = [mat([1.0, 2.0, 3.0]), mat([5.0; 3]), mat([0.0; 3])];
-        let lights = Lights::new(&tris, &[0, 1, 2], &mats);
+        let lights = Lights::new(&tris, &[0, 1, 2], &mats).unwrap();
         assert_eq!(lights.len(), 2);
         assert_eq!(lights.light_of(2), None);
         let pdf = |w: Vec3| -> f32 {
@@ -367,7 +459,7 @@ mod tests {
     #[test]
     fn chi2_emission_direction() {
         let tris = [[Vec3::ZERO, Vec3::X, Vec3::Y]];
-        let lights = Lights::new(&tris, &[0], &[mat([1.0; 3])]);
+        let lights = Lights::new(&tris, &[0], &[mat([1.0; 3])]).unwrap();
         let n = lights.get(0).n;
         let r = chi2_sphere(
             |_, u| Some(lights.sample_direction(0, u).0),

@@ -140,7 +140,7 @@ fn with_pass<R>(
     integrator: &Integrator,
     set: &RenderSettings,
     pass: &DtfPass<'_>,
-    first_index: u32,
+    first_index: u64,
     progress: &dyn Progress,
     f: impl FnOnce(&Pass<'_>) -> R,
 ) -> R {
@@ -176,11 +176,7 @@ pub fn run_dtf_pass(
 ) -> Result<(Film, Vec<u64>, Counters), String> {
     let mut film = Film::new(set.width, set.height)?;
     let mut rays = vec![0u64; if pass.rays { film.pixels.len() } else { 0 }];
-    let first_sample = if pass.light_paths > 0 {
-        0
-    } else {
-        camera_index(first_index)?
-    };
+    let first_sample = if pass.light_paths > 0 { 0 } else { first_index };
     let c = with_pass(scene, integrator, set, pass, first_sample, progress, |p| {
         if pass.light_paths > 0 {
             render_light_pass(
@@ -213,7 +209,6 @@ pub fn run_dtf_pass_rest(
     if pass.light_paths > 0 || !integrator.splits_direct() {
         return Err("dtf: a rest film is for camera passes of BDPT".into());
     }
-    let first_index = camera_index(first_index)?;
     let mut film = Film::new(set.width, set.height)?;
     let mut rest = Film::new(set.width, set.height)?;
     let mut rays = vec![0u64; if pass.rays { film.pixels.len() } else { 0 }];
@@ -221,12 +216,6 @@ pub fn run_dtf_pass_rest(
         render_pass_rest(p, &mut film, &mut rest, pass.rays.then_some(&mut rays[..]))
     });
     Ok((film, rest, rays, c))
-}
-
-/// A camera pass's first sample index (sample indices are u32).
-fn camera_index(first_index: u64) -> Result<u32, String> {
-    u32::try_from(first_index)
-        .map_err(|_| format!("dtf: sample index {first_index} past the last one (2^32 - 1)"))
 }
 
 /// DTF's passes rendered in this process.

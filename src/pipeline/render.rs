@@ -57,7 +57,7 @@ pub struct Pass<'a> {
     pub set: &'a RenderSettings,
     pub counts: Counts<'a>,
     /// Sample index of each pixel's first sample in this pass.
-    pub first_index: u32,
+    pub first_index: u64,
     /// Random stream (phases of a method use different streams).
     pub stream: u32,
     pub progress: &'a dyn Progress,
@@ -182,7 +182,7 @@ fn pass<const N: usize>(
                 streams.clear();
                 streams.extend(chunk.iter().map(|&(x, k)| {
                     let pixel = (y * w + x as usize) as u32;
-                    SampleStream::new(&set.sampler, p.stream, pixel, p.first_index + k)
+                    SampleStream::new(&set.sampler, p.stream, pixel, p.first_index + k as u64)
                 }));
                 for (px, &(x, _)) in pixels.iter_mut().zip(chunk) {
                     px.0 = x;
@@ -210,9 +210,11 @@ fn pass<const N: usize>(
             let rays_before = c.rays;
             let k_n = p.counts.get(pixel);
             for k in 0..k_n {
-                let index = p.first_index + k;
+                let index = p.first_index + k as u64;
                 let mut s = SampleStream::new(&set.sampler, p.stream, pixel as u32, index);
-                out.sink.index = index;
+                // (a splat's batch: the index's low bits are enough)
+                let batch = index as u32;
+                out.sink.index = batch;
                 if let Some(vr) = vis_row.as_deref_mut() {
                     let (v, f) = p
                         .integrator
@@ -238,12 +240,12 @@ fn pass<const N: usize>(
                     let pixel = pixel as u32;
                     out.samples.push(Splat {
                         pixel,
-                        index,
+                        index: batch,
                         rgb: v,
                     });
                     out.rest.push(Splat {
                         pixel,
-                        index,
+                        index: batch,
                         rgb: [v[0] - f[0], v[1] - f[1], v[2] - f[2]],
                     });
                     continue;
@@ -260,7 +262,7 @@ fn pass<const N: usize>(
                 if splatting {
                     out.samples.push(Splat {
                         pixel: pixel as u32,
-                        index,
+                        index: batch,
                         rgb: v,
                     });
                 } else if out.rejected.check(&v) {
@@ -398,12 +400,8 @@ fn light_pass<const N: usize>(
             let a = first + ch * LIGHT_CHUNK;
             let b = (a + LIGHT_CHUNK).min(first + count);
             for m in a..b {
-                let mut s = SampleStream::new(
-                    &set.sampler,
-                    stream,
-                    (m % pixels) as u32,
-                    (m / pixels) as u32,
-                );
+                let mut s =
+                    SampleStream::new(&set.sampler, stream, (m % pixels) as u32, m / pixels);
                 sink.index = key(m);
                 integrator.light_sample::<N>(scene, &cam, &mut s, &mut sink, &mut c);
             }
@@ -466,7 +464,7 @@ pub fn render(
     integrator: &Integrator,
     set: &RenderSettings,
     budget: Budget,
-    first_index: u32,
+    first_index: u64,
     progress: &dyn Progress,
 ) -> Result<RenderOutput, String> {
     let mut film = if integrator.splats() {
@@ -485,7 +483,7 @@ pub fn render(
             integrator,
             set,
             counts,
-            first_index: first_index + spp,
+            first_index: first_index + spp as u64,
             stream: 0,
             progress,
         };

@@ -397,7 +397,7 @@ pub fn render_rw(
     planned += first as u64 * pixels as u64;
     progress.set_total(planned);
     let step = mt.div_ceil(4).max(1);
-    let pass = |counts: Counts, first_index: u32, film: &mut Film, vfilm: &mut Film| {
+    let pass = |counts: Counts, first_index: u64, film: &mut Film, vfilm: &mut Film| {
         let p = Pass {
             scene,
             integrator,
@@ -491,7 +491,7 @@ pub fn render_rw(
         progress.set_total(planned);
         counters.add(&pass(
             Counts::PerPixel(&counts),
-            done,
+            done as u64,
             &mut film,
             &mut vfilm,
         ));

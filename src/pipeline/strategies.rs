@@ -153,7 +153,7 @@ struct Args<'a> {
     scene: &'a Scene,
     set: &'a crate::pipeline::RenderSettings,
     opts: &'a BdptOptions,
-    first: u32,
+    first: u64,
     spp: u32,
     max_len: u32,
     slots: usize,
@@ -182,7 +182,8 @@ fn pass<const N: usize>(a: &Args) -> Vec<Sums> {
             for (x, own_x) in own.iter_mut().enumerate() {
                 let pixel = y * w + x;
                 for k in 0..a.spp {
-                    let mut st = SampleStream::new(&set.sampler, 0, pixel as u32, a.first + k);
+                    let mut st =
+                        SampleStream::new(&set.sampler, 0, pixel as u32, a.first + k as u64);
                     let mut cb = |ss: StrategySample| {
                         let Some(j) = slot(ss.s, ss.t, a.max_len) else {
                             return;

@@ -204,7 +204,8 @@ impl Solution {
     ) -> Result<Solution, String> {
         set.validate()?;
         let t0 = Instant::now();
-        let name = &scene.info.name;
+        // errors name the scene as the user gave it (its path)
+        let name = &scene.info.source;
         // --- which triangles take part, at which level
         let nt = scene.tris.len();
         let mut kd: Vec<Option<[f32; 3]>> = Vec::with_capacity(nt);

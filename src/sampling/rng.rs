@@ -69,7 +69,7 @@ pub struct SampleStream {
     key: u64,
     /// mix64(key, index): the per-sample base of the hash (random mode).
     base: u64,
-    index: u32,
+    index: u64,
     dim: u32,
     /// Sobol: the last set of four dimensions computed (`sobol_burley::sample_4d`, four
     /// dimensions for about the price of one) and its values; u32::MAX for none.
@@ -80,7 +80,7 @@ pub struct SampleStream {
 impl SampleStream {
     /// Stream for `sample_index` of `pixel` (ignored when dependent) in `stream`.
     #[inline]
-    pub fn new(cfg: &SamplerConfig, stream: u32, pixel: u32, sample_index: u32) -> Self {
+    pub fn new(cfg: &SamplerConfig, stream: u32, pixel: u32, sample_index: u64) -> Self {
         let mut key = mix64(cfg.seed ^ 0x6b61_6c6f_7300_0000);
         key = mix64(key ^ (stream as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
         if !cfg.dependent {
@@ -89,7 +89,7 @@ impl SampleStream {
         SampleStream {
             kind: cfg.kind,
             key,
-            base: mix64(key ^ (sample_index as u64).wrapping_mul(0xd1b5_4a32_d192_ed03)),
+            base: mix64(key ^ sample_index.wrapping_mul(0xd1b5_4a32_d192_ed03)),
             index: sample_index,
             dim: 0,
             set4: u32::MAX,
@@ -105,7 +105,7 @@ impl SampleStream {
         SampleStream {
             kind: self.kind,
             key,
-            base: mix64(key ^ (self.index as u64).wrapping_mul(0xd1b5_4a32_d192_ed03)),
+            base: mix64(key ^ self.index.wrapping_mul(0xd1b5_4a32_d192_ed03)),
             index: self.index,
             dim: 0,
             set4: u32::MAX,
@@ -133,7 +133,7 @@ impl SampleStream {
                 // the same numbers as sobol_burley::sample(index, d, seed), four at a time
                 let set = d / 4;
                 if self.set4 != set {
-                    self.cache4 = sobol_burley::sample_4d(self.index, set, self.key as u32);
+                    self.cache4 = sobol_burley::sample_4d(self.index as u32, set, self.key as u32);
                     self.set4 = set;
                 }
                 self.cache4[(d % 4) as usize].min(ONE_MINUS_EPS)
@@ -213,7 +213,7 @@ mod tests {
             // forwards, with jumps backwards and into the middle of a set
             for d in (0..40).chain([3, 2, 17, 16, 5, 63, 62]) {
                 s.set_dimension(d);
-                let want = sobol_burley::sample(index, d, s.key as u32).min(ONE_MINUS_EPS);
+                let want = sobol_burley::sample(index as u32, d, s.key as u32).min(ONE_MINUS_EPS);
                 assert_eq!(s.next_1d(), want, "index {index} dimension {d}");
             }
         }

@@ -179,13 +179,17 @@ pub struct SceneDesc {
     /// Light from far away (at most one).
     pub environment: Option<EnvironmentDesc>,
     pub point_lights: Vec<PointLightDesc>,
-    /// Zero-area (or non-finite) faces skipped while loading.
+    /// Zero-area faces skipped while loading.
     pub skipped_degenerate: usize,
+    /// Faces skipped because a coordinate or the face's normal overflows (not finite
+    /// in single precision).
+    pub skipped_nonfinite: usize,
     pub warnings: Vec<String>,
 }
 
 impl SceneDesc {
-    /// Add a triangle unless it has zero area (then it is counted and skipped).
+    /// Add a triangle unless it has zero area or coordinates that overflow (then it is
+    /// counted as such and skipped).
     pub fn push_triangle(
         &mut self,
         v: [Vec3; 3],
@@ -195,7 +199,11 @@ impl SceneDesc {
     ) {
         let c = (v[1] - v[0]).cross(v[2] - v[0]);
         let scale = (v[1] - v[0]).length_squared() + (v[2] - v[0]).length_squared();
-        if !c.is_finite() || c.length_squared() <= 1e-14 * scale * scale || scale == 0.0 {
+        if !c.is_finite() || !scale.is_finite() || !c.length_squared().is_finite() {
+            self.skipped_nonfinite += 1;
+            return;
+        }
+        if c.length_squared() <= 1e-14 * scale * scale || scale == 0.0 {
             self.skipped_degenerate += 1;
             return;
         }
@@ -220,10 +228,15 @@ impl SceneDesc {
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct SceneInfo {
     pub name: String,
+    /// The scene as the user named it: its file's path, or a built-in name ([`load`];
+    /// the description's name when built from one).
+    pub source: String,
     pub triangles: usize,
     pub materials: usize,
     pub emitters: usize,
     pub skipped_degenerate: usize,
+    /// Faces skipped because their coordinates or area are not finite.
+    pub skipped_nonfinite: usize,
     pub bounds_min: [f32; 3],
     pub bounds_max: [f32; 3],
     pub load_seconds: f64,
@@ -256,6 +269,9 @@ pub struct Scene {
     /// The default camera's warning (placed inside a closed room, or seeing no light),
     /// which holds only for renders that use that camera.
     pub camera_warning: Option<String>,
+    /// A hash of the contents of the files the scene was read from ([`load`]; 0 when
+    /// built from a description): film parts of one render share it.
+    pub content_hash: u64,
 }
 
 impl Scene {
@@ -316,7 +332,31 @@ impl Scene {
         let t0 = Instant::now();
         let bvh = Bvh::build(&desc.positions);
         let bvh_seconds = t0.elapsed().as_secs_f64();
-        let mut lights = Lights::new(&desc.positions, &desc.material, &materials);
+        // an emitter whose power overflows, named where the scene defines it
+        let too_bright = |e: crate::light::TooBright| {
+            use crate::light::TooBright as T;
+            let at =
+                |s: &Option<String>| s.as_deref().map(|s| format!("{s}: ")).unwrap_or_default();
+            let who = match e {
+                T::Area { material, .. } => {
+                    format!(
+                        "{} (emitter)",
+                        desc.materials[material as usize].described()
+                    )
+                }
+                T::Point { index, .. } => {
+                    format!("{}point light", at(&desc.point_lights[index].source))
+                }
+                T::Env { .. } => format!(
+                    "{}environment",
+                    at(&desc.environment.as_ref().and_then(|e| e.source.clone()))
+                ),
+                T::Total { .. } => format!("scene {}", desc.name),
+            };
+            format!("{who}: {}", e.describe())
+        };
+        let mut lights =
+            Lights::new(&desc.positions, &desc.material, &materials).map_err(too_bright)?;
         let bounds = desc.bounds();
         let env = match &desc.environment {
             Some(e) => Some(environment_light(e)?),
@@ -346,7 +386,9 @@ impl Scene {
         } else {
             bounds.diagonal() * 0.5
         };
-        lights.add_distant(points, env, radius);
+        lights
+            .add_distant(points, env, radius)
+            .map_err(too_bright)?;
         let mut warnings = desc.warnings;
         let mut camera_warning = None;
         let (camera, camera_how) = match desc.camera {
@@ -381,12 +423,20 @@ impl Scene {
                 desc.name, desc.skipped_degenerate
             ));
         }
+        if desc.skipped_nonfinite > 0 {
+            warnings.push(format!(
+                "scene {}: skipped {} faces whose coordinates or area are not finite (beyond single precision)",
+                desc.name, desc.skipped_nonfinite
+            ));
+        }
         let info = SceneInfo {
             name: desc.name.clone(),
+            source: desc.name.clone(),
             triangles: desc.positions.len(),
             materials: materials.len(),
             emitters: lights.len(),
             skipped_degenerate: desc.skipped_degenerate,
+            skipped_nonfinite: desc.skipped_nonfinite,
             bounds_min: if bounds.is_empty() {
                 [0.0; 3]
             } else {
@@ -418,6 +468,7 @@ impl Scene {
             info,
             warnings,
             camera_warning,
+            content_hash: 0,
         })
     }
 
@@ -571,8 +622,15 @@ pub fn default_camera(b: &Bounds3) -> CameraDesc {
 /// Mitsuba `.xml` file.
 pub fn load(spec: &str) -> Result<Scene, String> {
     let t0 = Instant::now();
-    let desc = load_desc(spec)?;
-    Scene::build(desc, t0.elapsed().as_secs_f64())
+    let (scene, hash) = crate::input::content_hash_of_reads(|| {
+        let desc = load_desc(spec)?;
+        Scene::build(desc, t0.elapsed().as_secs_f64())
+    });
+    let mut scene = scene?;
+    scene.info.source = spec.to_string();
+    // a built-in scene reads no file: its name is its content
+    scene.content_hash = hash.unwrap_or_else(|| crate::input::CRC64.checksum(spec.as_bytes()));
+    Ok(scene)
 }
 
 /// Read a scene description without building it.

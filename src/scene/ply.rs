@@ -129,6 +129,28 @@ fn one_line(e: &impl std::fmt::Display) -> String {
     }
 }
 
+/// A message without the parser's debug text (`ParseIntError { kind: InvalidDigit }`,
+/// `String: '...' Error: ...`): what comes before it.
+fn plain(s: &str) -> String {
+    let cut = [
+        " String: ",
+        " Error: ",
+        " {",
+        "ParseIntError",
+        "ParseFloatError",
+    ]
+    .iter()
+    .filter_map(|m| s.find(m))
+    .min()
+    .unwrap_or(s.len());
+    let t = s[..cut].trim_end_matches([':', ' ', '.']);
+    if t.is_empty() {
+        "malformed data".into()
+    } else {
+        t.to_string()
+    }
+}
+
 /// Parse PLY bytes; `file` names the source in errors.
 pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PlyMesh, String> {
     if !bytes.starts_with(b"ply") {
@@ -176,12 +198,19 @@ fn parse_inner(bytes: &[u8], file: &str) -> Result<PlyMesh, String> {
     let mut faces: Vec<Face> = Vec::new();
     let mut have_faces = false;
     for (name, def) in &header.elements {
+        // the crate's messages carry its parser's debug text: say what is wrong instead
         let fail = |e: ply_rs_bw::parser::ParseError| {
-            format!(
+            match e.line() {
+            Some(l) => format!(
+                "{file}:{l}: PLY element '{name}' ({} declared): the line does not match the header's properties (a value missing, extra or not a number)",
+                def.count
+            ),
+            None => format!(
                 "{file}: PLY element '{name}' ({} declared): {}",
                 def.count,
-                one_line(&e)
-            )
+                plain(&one_line(&e))
+            ),
+        }
         };
         match name.as_str() {
             "vertex" => {
@@ -201,6 +230,17 @@ fn parse_inner(bytes: &[u8], file: &str) -> Result<PlyMesh, String> {
                     .map_err(fail)?;
             }
         }
+    }
+    if reader.get_ref().iter().any(|b| !b.is_ascii_whitespace()) {
+        let counts: Vec<String> = header
+            .elements
+            .iter()
+            .map(|(n, d)| format!("{} {n}", d.count))
+            .collect();
+        return Err(format!(
+            "{file}: PLY data goes on after the elements its header declares ({}): the counts in the header are wrong",
+            counts.join(", ")
+        ));
     }
     if !have_faces {
         return Err(format!(

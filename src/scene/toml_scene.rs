@@ -253,6 +253,15 @@ pub fn load(path: &Path) -> Result<SceneDesc, String> {
     parse(&text, &file, path.parent().unwrap_or(Path::new(".")))
 }
 
+/// The 1-based number of the `nth` line (0-based) whose trimmed text satisfies `pred`.
+fn nth_line(text: &str, nth: usize, pred: impl Fn(&str) -> bool) -> Option<usize> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| pred(l.trim()))
+        .nth(nth)
+        .map(|(i, _)| i + 1)
+}
+
 /// First line of a TOML error, with the file name and line.
 /// One-line message for a TOML error: `file:line: message`.
 pub fn toml_error(file: &str, text: &str, e: toml::de::Error) -> String {
@@ -285,7 +294,25 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             .to_string(),
         ..Default::default()
     };
-    for o in &sf.objects {
+    // content errors name the line of their table or key (`file:line`)
+    let at = |line: Option<usize>| match line {
+        Some(l) => format!("{file}:{l}"),
+        None => file.to_string(),
+    };
+    let header = |h: &str, nth: usize| at(nth_line(text, nth, |l| l.starts_with(h)));
+    let material_at = |name: &str| {
+        let keys = [name.to_string(), format!("\"{name}\"")];
+        at(nth_line(text, 0, |l| {
+            let l = l.trim_start_matches('[');
+            let l = l.strip_prefix("materials.").unwrap_or(l);
+            keys.iter().any(|k| {
+                l.strip_prefix(k.as_str())
+                    .is_some_and(|r| r.trim_start().starts_with(['=', ']', '.']))
+            })
+        }))
+    };
+    for (i, o) in sf.objects.iter().enumerate() {
+        let o_at = header("[[objects]]", i);
         let t = Vec3::from(o.translate.unwrap_or([0.0; 3]));
         let r = o.rotate.unwrap_or([0.0; 3]);
         let s = match o.scale {
@@ -297,7 +324,7 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             || s.abs().min_element() == 0.0
         {
             return Err(format!(
-                "{file}: object {}: transform values must be finite and scale non-zero",
+                "{o_at}: object {}: transform values must be finite and scale non-zero",
                 o.file
             ));
         }
@@ -310,17 +337,37 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
         let xf = Mat4::from_scale_rotation_translation(s, q, t);
         let p = super::mtl::normalise_path(dir, &o.file);
         crate::input::check_regular_file(&p, crate::input::max_input_bytes()?)
-            .map_err(|e| format!("{file}: object file {e}"))?;
+            .map_err(|e| format!("{o_at}: object file {e}"))?;
+        // an OBJ reader takes any text for an empty mesh: other files are named
+        let ext = p
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        let other = match ext.as_deref() {
+            Some("xml") => Some("a Mitsuba XML scene"),
+            Some("toml") => Some("a TOML scene"),
+            Some("ply") => Some("a PLY mesh"),
+            Some("mtl") => Some("a material library"),
+            Some("exr" | "png" | "jpg" | "jpeg" | "hdr" | "pfm") => Some("an image"),
+            _ => None,
+        };
+        if let Some(what) = other {
+            return Err(format!(
+                "{o_at}: object file {}: is {what}, not an OBJ file ([[objects]] files are OBJ meshes)",
+                p.display()
+            ));
+        }
         super::obj::load_obj_file(&p, xf, &mut desc)?;
     }
     for (name, ov) in &sf.materials {
+        let m_at = material_at(name);
         let mut found = false;
         for m in desc.materials.iter_mut().filter(|m| &m.name == name) {
             found = true;
             let check = |v: &[f32], what: &str| -> Result<(), String> {
                 if v.iter().any(|x| !x.is_finite() || *x < 0.0) {
                     Err(format!(
-                        "{file}: materials.{name}.{what}: values must be finite and non-negative"
+                        "{m_at}: materials.{name}.{what}: values must be finite and non-negative"
                     ))
                 } else {
                     Ok(())
@@ -337,6 +384,8 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             if let Some(v) = ov.ke {
                 check(&v, "ke")?;
                 m.ke = v;
+                // its emission is this file's: errors about it name this line
+                m.source = Some(format!("{m_at}: materials.{name}"));
             }
             if let Some(v) = ov.ns {
                 check(&[v], "ns")?;
@@ -357,11 +406,11 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             if let Some(model) = &ov.model {
                 model
                     .check()
-                    .map_err(|e| format!("{file}: materials.{name}.model: {e}"))?;
+                    .map_err(|e| format!("{m_at}: materials.{name}.model: {e}"))?;
                 let model = model.model();
                 // the same validation the scene build applies, reported with the file
                 super::bsdf_of_model(&model, m.kd)
-                    .map_err(|e| format!("{file}: materials.{name}.model: {e}"))?;
+                    .map_err(|e| format!("{m_at}: materials.{name}.model: {e}"))?;
                 m.model = Some(model);
                 if m.source.is_none() {
                     m.source = Some(format!("{file} materials.{name}"));
@@ -376,21 +425,22 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
         }
         if !found {
             return Err(format!(
-                "{file}: materials.{name}: no material of that name in the scene"
+                "{m_at}: materials.{name}: no material of that name in the scene"
             ));
         }
     }
+    let env_at = header("[environment]", 0);
     if let Some(e) = &sf.environment {
         let radiance = e.radiance.unwrap_or([1.0; 3]);
         if radiance.iter().any(|v| !v.is_finite() || *v < 0.0) {
             return Err(format!(
-                "{file}: [environment] radiance: values must be finite and non-negative"
+                "{env_at}: [environment] radiance: values must be finite and non-negative"
             ));
         }
         let r = e.rotate.unwrap_or([0.0; 3]);
         if r.iter().any(|v| !v.is_finite()) {
             return Err(format!(
-                "{file}: [environment] rotate: values must be finite"
+                "{env_at}: [environment] rotate: values must be finite"
             ));
         }
         let q = Quat::from_euler(
@@ -403,9 +453,9 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             Some(m) => {
                 let p = super::mtl::normalise_path(dir, m);
                 crate::input::check_regular_file(&p, crate::input::max_input_bytes()?)
-                    .map_err(|err| format!("{file}: [environment] map: {err}"))?;
+                    .map_err(|err| format!("{env_at}: [environment] map: {err}"))?;
                 crate::image_io::check_readable(&p)
-                    .map_err(|err| format!("{file}: [environment] map: {err}"))?;
+                    .map_err(|err| format!("{env_at}: [environment] map: {err}"))?;
                 Some(p)
             }
             None => None,
@@ -414,38 +464,41 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             radiance,
             map,
             to_world: glam::Mat3::from_quat(q),
-            source: Some(format!("{file} [environment]")),
+            source: Some(format!("{env_at} [environment]")),
         });
     }
     for (i, p) in sf.point_lights.iter().enumerate() {
+        let p_at = header("[[point_lights]]", i);
         let ok = |v: &[f32; 3]| v.iter().all(|x| x.is_finite());
         if !ok(&p.position) || !ok(&p.intensity) || p.intensity.iter().any(|v| *v < 0.0) {
             return Err(format!(
-                "{file}: point_lights[{i}]: position and intensity must be finite, intensity non-negative"
+                "{p_at}: point_lights[{i}]: position and intensity must be finite, intensity non-negative"
             ));
         }
         desc.point_lights.push(super::PointLightDesc {
             position: Vec3::from(p.position),
             intensity: p.intensity,
-            source: Some(format!("{file} point_lights[{i}]")),
+            source: Some(format!("{p_at} point_lights[{i}]")),
         });
     }
     if let Some(c) = sf.camera {
-        c.validate().map_err(|e| format!("{file}: [camera]: {e}"))?;
+        c.validate()
+            .map_err(|e| format!("{}: [camera]: {e}", header("[camera]", 0)))?;
         desc.camera = Some(c);
     }
+    let r_at = header("[render]", 0);
     if let Some(r) = sf.render {
         if let Some([w, h]) = r.res {
             crate::film::check_resolution(w, h)
-                .map_err(|e| format!("{file}: [render] res: {e}"))?;
+                .map_err(|e| format!("{r_at}: [render] res: {e}"))?;
         }
         if r.spp == Some(0) {
-            return Err(format!("{file}: [render] spp: must be at least 1"));
+            return Err(format!("{r_at}: [render] spp: must be at least 1"));
         }
         if let Some(d) = r.max_depth {
             if d < -1 || d == 0 {
                 return Err(format!(
-                    "{file}: [render] max_depth: {d}: must be -1 (unlimited) or at least 1"
+                    "{r_at}: [render] max_depth: {d}: must be -1 (unlimited) or at least 1"
                 ));
             }
         }

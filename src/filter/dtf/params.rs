@@ -264,6 +264,14 @@ pub struct DtfParams {
     pub direct: DirectMode,
 }
 
+/// The largest `--dtf-n`: phase 1 is a fixed cost before any budget is shared, and
+/// the paper's n is 45..70.
+pub const MAX_N: u32 = 1 << 16;
+
+/// The smallest `--dtf-eps`: a pixel whose standard deviation equals its value needs
+/// (3 / eps_r)^2 samples, 9e8 at this bound.
+pub const MIN_EPS: f64 = 1e-4;
+
 impl Default for DtfParams {
     fn default() -> Self {
         crate::options::defaults::<DtfParams>()
@@ -288,33 +296,44 @@ impl DtfParams {
     pub fn eps(&self) -> Result<f64, String> {
         self.eps_r
             .map(|e| e as f64)
-            .ok_or_else(|| "dtf: no relative error eps_r given (--dtf-eps)".to_string())
+            .ok_or_else(|| "--dtf-eps: no relative error given".to_string())
     }
 
     /// A clear error for parameters the algorithm cannot use.
     pub fn validate(&self) -> Result<(), String> {
         if let Some(n) = self.n.filter(|&n| n < 2) {
             return Err(format!(
-                "dtf: n = {n}: the dependent phase needs at least 2 samples per pixel to estimate sigma"
+                "--dtf-n {n}: the dependent phase needs at least 2 samples per pixel to estimate sigma"
+            ));
+        }
+        if let Some(n) = self.n.filter(|&n| n > MAX_N) {
+            return Err(format!(
+                "--dtf-n {n}: at most {MAX_N} dependent samples per pixel (the paper uses 45..70)"
             ));
         }
         if let Some(e) = self.eps_r.filter(|e| !(e.is_finite() && *e > 0.0)) {
             return Err(format!(
-                "dtf: eps_r = {e}: the relative error must be positive"
+                "--dtf-eps {e:e}: the relative error must be positive"
+            ));
+        }
+        if let Some(e) = self.eps_r.filter(|&e| (e as f64) < MIN_EPS) {
+            return Err(format!(
+                "--dtf-eps {e:e}: below {MIN_EPS:e} a pixel whose noise is as large as its value needs more than (3 / eps_r)^2 = {:.0e} samples (the paper uses 0.03)",
+                (3.0 / MIN_EPS).powi(2)
             ));
         }
         if self.categories.is_empty() {
-            return Err("dtf: the list of sample categories is empty".into());
+            return Err("--dtf-categories: the list of sample categories is empty".into());
         }
         if self.categories.windows(2).any(|w| w[0] >= w[1]) {
             return Err(format!(
-                "dtf: categories {:?} must be strictly increasing",
+                "--dtf-categories {:?}: must be strictly increasing",
                 self.categories
             ));
         }
         if !(1..=32).contains(&self.m_max) {
             return Err(format!(
-                "dtf: m_max = {}: the window side must be 1..=32",
+                "--dtf-mmax {}: the window side must be 1..=32",
                 self.m_max
             ));
         }
@@ -325,18 +344,28 @@ impl DtfParams {
         }
         if !(0.0..=1.0).contains(&self.top_up_share) {
             return Err(format!(
-                "dtf: top-up share = {}: must be between 0 and 1",
+                "--dtf-topup {}: must be between 0 and 1",
                 self.top_up_share
             ));
         }
         if !(self.z.is_finite() && self.z > 0.0) {
-            return Err(format!("dtf: z = {}: must be a positive number", self.z));
+            return Err(format!("--dtf-z {}: must be a positive number", self.z));
         }
         if !(self.dep_noise.is_finite() && self.dep_noise >= 0.0) {
             return Err(format!(
-                "dtf: dep-noise = {}: must be a number >= 0",
+                "--dtf-dep-noise {}: must be a number >= 0",
                 self.dep_noise
             ));
+        }
+        for (flag, v) in [
+            ("--dtf-floor", self.floor),
+            ("--dtf-rel-floor", self.relative_sigma_floor),
+            ("--dtf-max-ratio", self.max_weight_ratio),
+            ("--dtf-guard", self.guard),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("{flag} {v}: must be a number >= 0"));
+            }
         }
         if let Some(f) = self
             .light_share
@@ -348,7 +377,7 @@ impl DtfParams {
             ));
         }
         if !self.df0_min.is_finite() {
-            return Err(format!("dtf: df0_min = {} is not finite", self.df0_min));
+            return Err(format!("--dtf-df0 {}: is not finite", self.df0_min));
         }
         Ok(())
     }

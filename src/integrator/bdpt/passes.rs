@@ -49,7 +49,7 @@ pub fn render(
         for y in 0..h {
             for x in 0..w {
                 let pix = (y * w + x) as usize;
-                let mut s = SampleStream::new(&cfg, 0, pix as u32, j);
+                let mut s = SampleStream::new(&cfg, 0, pix as u32, j as u64);
                 let mut splats: Vec<(Vec2, [f32; 3])> = Vec::new();
                 let v = f(&cam, x, y, &mut s, &mut |r, c| splats.push((r, c)));
                 for c in 0..3 {

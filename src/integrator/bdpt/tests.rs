@@ -20,7 +20,7 @@ fn mis_weights_of_a_path_sum_to_one() {
     let cfg = SamplerConfig::default();
     let mut checked = [0usize; 8];
     for k in 0..3000u32 {
-        let mut rs = SampleStream::new(&cfg, 7, k, k);
+        let mut rs = SampleStream::new(&cfg, 7, k, k as u64);
         let mut c = Counters::default();
         rs.set_dimension(0);
         let u = rs.next_2d();
@@ -324,7 +324,7 @@ fn unweighted_strategies_converge_to_the_same_image() {
         let mut pass: std::collections::HashMap<(u32, u32), f64> = Default::default();
         for y in 0..h {
             for x in 0..w {
-                let mut s = SampleStream::new(&cfg, 0, y * w + x, j);
+                let mut s = SampleStream::new(&cfg, 0, y * w + x, j as u64);
                 let mut c = Counters::default();
                 sample_pixel_with::<3>(
                     &scene,
@@ -479,7 +479,7 @@ fn strategies_add_up_to_the_sample() {
     let cfg = SamplerConfig::default();
     let mut seen = std::collections::HashSet::new();
     for k in 0..200u32 {
-        let mut s = SampleStream::new(&cfg, 0, k % 64, k);
+        let mut s = SampleStream::new(&cfg, 0, k % 64, k as u64);
         let mut c = Counters::default();
         let mut splat_sum = [0.0f32; 3];
         let mut strat_sum = [0.0f32; 3];

@@ -152,7 +152,7 @@ fn rest_pass_splits_off_exactly_the_emission_seen_directly() {
         for i in 0..400u32 {
             let (x, y) = (i % 20, i / 20);
             let seen = (0..spp).any(|k| {
-                let mut st = crate::sampling::SampleStream::new(&set.sampler, 1, i, k);
+                let mut st = crate::sampling::SampleStream::new(&set.sampler, 1, i, k as u64);
                 let ray = crate::integrator::camera_ray(&cam, x, y, &mut st);
                 let mut c = Counters::default();
                 let f = crate::integrator::visible::emission::<3>(
