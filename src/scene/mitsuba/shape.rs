@@ -83,6 +83,7 @@ impl<'a> Loader<'a> {
                 e.at.rsplit(':').next().unwrap_or("")
             );
             m.ke = radiance;
+            m.source = Some(e.at.clone());
             self.desc.materials.push(m);
             mat = self.desc.materials.len() as u32 - 1;
         } else if null_bsdf {

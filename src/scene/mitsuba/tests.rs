@@ -521,3 +521,28 @@ fn fuzzed_structure_loads_or_fails_in_one_line() {
     assert!(loaded > 0 && failed > 0, "{loaded} loaded, {failed} failed");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Emission whose power overflows single precision is refused by the lights, naming the
+/// emitter's line (an area light of 1e38 panicked in the light choice; a point light of
+/// 1e38 vanished from the image).
+#[test]
+fn emitters_beyond_single_precision_are_named() {
+    for (body, needle) in [
+        (
+            r#"<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1e38"/></emitter></shape>"#,
+            "t.xml:2: material",
+        ),
+        (
+            r#"<shape type="rectangle"/><emitter type="point"><rgb name="intensity" value="1e38"/></emitter>"#,
+            "t.xml:2: point light",
+        ),
+    ] {
+        let e = crate::scene::Scene::build(scene(body).unwrap(), 0.0)
+            .err()
+            .unwrap();
+        assert!(
+            e.contains(needle) && e.contains("single-precision"),
+            "{body}: {e}"
+        );
+    }
+}
