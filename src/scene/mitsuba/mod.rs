@@ -216,7 +216,16 @@ fn parse_inner(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> 
     }
     desc.warnings.extend(warnings);
     if desc.positions.is_empty() {
-        return Err(format!("{file}: the scene has no shapes kalos can render"));
+        // name what was left out, where: that is why the scene is empty
+        let why = desc
+            .warnings
+            .iter()
+            .find(|w| w.contains("left out"))
+            .map(|w| format!(" ({w})"))
+            .unwrap_or_default();
+        return Err(format!(
+            "{file}: the scene has no shapes kalos can render{why}"
+        ));
     }
     Ok(desc)
 }

@@ -350,9 +350,9 @@ fn loading_is_linear_in_the_number_of_shapes() {
         }
         s + "</scene>"
     };
-    let time = |n: usize| {
+    let time = |n: usize, runs: usize| {
         let t = text(n);
-        (0..3)
+        (0..runs)
             .map(|_| {
                 let start = std::time::Instant::now();
                 let d = parse(&t, "big.xml", Path::new(".")).unwrap();
@@ -361,11 +361,11 @@ fn loading_is_linear_in_the_number_of_shapes() {
             })
             .fold(f64::INFINITY, f64::min)
     };
-    let (small, large) = (time(6_250), time(50_000));
+    let (small, large) = (time(12_500, 3), time(100_000, 2));
     // linear: about 8; quadratic: about 64. The bound leaves room for a busy machine.
     assert!(
         large / small < 24.0,
-        "6,250 shapes {small:.3} s, 50,000 {large:.3} s"
+        "12,500 shapes {small:.3} s, 100,000 {large:.3} s"
     );
 }
 
@@ -545,4 +545,16 @@ fn emitters_beyond_single_precision_are_named() {
             "{body}: {e}"
         );
     }
+}
+
+/// A scene whose every shape is left out says which and where, not only that it is empty.
+#[test]
+fn an_empty_scene_names_what_was_left_out() {
+    let e = scene(r#"<shape type="hair"/>"#).unwrap_err();
+    assert!(
+        e.starts_with(
+            "t.xml: the scene has no shapes kalos can render (t.xml:2: unsupported shape 'hair'"
+        ),
+        "{e}"
+    );
 }
