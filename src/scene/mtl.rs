@@ -153,6 +153,8 @@ struct Pbr {
     ka: Option<[f32; 3]>,
     pr: Option<f32>,
     pm: Option<f32>,
+    /// The material has an `Ni` statement (Blender 4's importer keeps IOR 1.5 without).
+    ni_given: bool,
 }
 
 /// Blender's Principled BSDF from what its exporter wrote, as a kalos surface model:
@@ -161,13 +163,15 @@ struct Pbr {
 /// a coat whose normal-incidence reflectance is F0 = 0.08 s (Blender 2.8-3.x, s = `Ks`)
 /// or F0(`Ni`) 2 s (Blender 4's "IOR level"), of index eta = (1 + sqrt F0)/(1 - sqrt F0);
 /// a metal (m >= 0.5) a conductor whose F0 is the base colour. `illum 1` (Blender's
-/// specular 0) and glass or mirror models stay as MTL reads them. Returns the model and
-/// a note when the material is only approximated.
+/// specular 0) and glass or mirror models stay as MTL reads them. A dielectric whose
+/// coat reflects nothing (`Ks 0`; Blender 4's `Ni 1` or `Ni 0`, an IOR Blender clamps
+/// to 1) is the diffuse base alone, as Blender renders it: the model is None then.
+/// Returns the model and a note when the material is only approximated.
 fn principled(
     m: &MaterialDesc,
     pbr: &Pbr,
     writer: Writer,
-) -> Option<(super::SurfaceModel, Option<String>)> {
+) -> Option<(Option<super::SurfaceModel>, Option<String>)> {
     use super::SurfaceModel;
     use crate::material::Distribution;
     if !matches!(m.illum, 2 | 3) {
@@ -206,32 +210,38 @@ fn principled(
             note = Some("a metal's colour from map_Kd: rendered with Kd, untextured".into());
         }
         return Some((
-            SurfaceModel::Conductor {
+            Some(SurfaceModel::Conductor {
                 eta: m.kd.map(eta_of),
                 k: [0.0; 3],
                 specular: [1.0; 3],
                 alpha,
                 distribution: Distribution::Ggx,
-            },
+            }),
             note,
         ));
     }
     let level = (m.ks[0] + m.ks[1] + m.ks[2]) / 3.0;
+    let fresnel0 = |ior: f32| ((ior - 1.0) / (ior + 1.0)).powi(2);
     let f0 = match writer {
-        Writer::BlenderCpp(v) if v >= 4 && m.ni > 1.0 => {
-            ((m.ni - 1.0) / (m.ni + 1.0)).powi(2) * 2.0 * level
+        // Blender 4's IOR socket is at least 1; without Ni its importer keeps 1.5
+        Writer::BlenderCpp(v) if v >= 4 => {
+            let ior = if pbr.ni_given { m.ni.max(1.0) } else { 1.5 };
+            fresnel0(ior) * 2.0 * level
         }
-        Writer::Other if m.ni > 1.0 => ((m.ni - 1.0) / (m.ni + 1.0)).powi(2),
+        Writer::Other if m.ni > 1.0 => fresnel0(m.ni),
         _ => 0.08 * level,
     };
+    if f0 < 1e-6 {
+        return Some((None, note));
+    }
     Some((
-        SurfaceModel::Plastic {
+        Some(SurfaceModel::Plastic {
             eta: eta_of(f0),
             specular: [1.0; 3],
             alpha,
             distribution: Distribution::Ggx,
             nonlinear: false,
-        },
+        }),
         note,
     ))
 }
@@ -337,6 +347,9 @@ pub fn parse_mtl(
             "Ns" => m.ns = v3(1)?[0],
             "Ni" => {
                 m.ni = v3(1)?[0];
+                if let Some(p) = pbr.last_mut() {
+                    p.ni_given = true;
+                }
                 if let Some(l) = lines.last_mut() {
                     l.1 = Some(line_no);
                 }
@@ -403,7 +416,10 @@ pub fn parse_mtl(
             continue;
         }
         if let Some((model, note)) = principled(m, p, writer) {
-            m.model = Some(model);
+            if model.is_none() {
+                m.ks = [0.0; 3]; // no coat: the base alone, not MTL's Phong lobe
+            }
+            m.model = model;
             m.notes.extend(note);
             read_as_pbr += 1;
         }
