@@ -303,3 +303,23 @@ fn camera_follows_mitsuba_conventions() {
     let e = scene(r#"<sensor type="perspective"><string name="fov_axis" value="z"/></sensor>"#);
     assert!(e.unwrap_err().contains("fov_axis \"z\""));
 }
+
+/// Mitsuba 3.9.1 (scalar_rgb) evaluates `plastic` (diffuse_reflectance 0.5, int_ior 1.9)
+/// at normal incidence, wo = wi = n, to f cos = 0.152383: the reader keeps the diffuse
+/// reflectance as given and the Plastic model applies the coat once (it was applied
+/// twice, a 0.29x darker base).
+#[test]
+fn plastic_base_agrees_with_mitsuba() {
+    let d = scene(
+        r#"<shape type="rectangle"><bsdf type="plastic">
+        <rgb name="diffuse_reflectance" value="0.5"/><float name="int_ior" value="1.9"/>
+        </bsdf></shape>"#,
+    )
+    .unwrap();
+    let m = d.materials.last().unwrap();
+    assert_eq!(m.kd, [0.5; 3]);
+    let b = crate::scene::bsdf_of_model(m.model.as_ref().unwrap(), m.kd).unwrap();
+    let z = Vec3::Z;
+    let f = b.eval::<3>(z, z).0[0];
+    assert!((f - 0.152383).abs() < 2e-3 * 0.152383, "{f}");
+}
