@@ -3,6 +3,7 @@
 use super::*;
 use crate::material::conductor::fresnel_conductor;
 use crate::material::dielectric::fresnel_dielectric;
+use crate::scene::texture::OpacityFrom;
 
 /// A normalized-Phong exponent with about the spread of a GGX lobe of roughness alpha.
 pub(super) fn phong_exponent(alpha: f32) -> f32 {
@@ -98,9 +99,10 @@ impl<'a> Loader<'a> {
         match c {
             None => m.kd = [default; 3],
             Some(Color::Rgb(v)) => m.kd = v,
-            Some(Color::Bitmap(p)) => {
+            Some(Color::Bitmap(p, sampling)) => {
                 m.kd = [1.0; 3];
                 m.map_kd = Some(p);
+                m.kd_sampling = sampling;
             }
         }
     }
@@ -302,18 +304,16 @@ impl<'a> Loader<'a> {
                 let mut inner_m = self.bsdf(inner)?;
                 match kind {
                     "mask" => {
-                        let op = self.prop(el, "opacity");
-                        self.mark_all(el);
-                        self.warn(
-                            "bsdf mask",
-                            format!(
-                                "{}: mask (opacity{}) is not supported: rendered opaque",
-                                el.at,
-                                op.and_then(|o| o.attr("value"))
-                                    .map(|v| format!(" {v}"))
-                                    .unwrap_or_default()
-                            ),
-                        );
+                        // a cut-out: the opacity's share of light meets the nested BSDF,
+                        // the rest passes (Mitsuba's default opacity 0.5)
+                        match self.color(el, "opacity", Use::Reflectance)? {
+                            None => inner_m.opacity *= 0.5,
+                            Some(Color::Rgb(v)) => inner_m.opacity *= (v[0] + v[1] + v[2]) / 3.0,
+                            Some(Color::Bitmap(p, sampling)) => {
+                                inner_m.map_opacity =
+                                    Some((p, sampling, OpacityFrom::Luminance));
+                            }
+                        }
                     }
                     "bumpmap" | "normalmap" => {
                         self.mark_all(el);

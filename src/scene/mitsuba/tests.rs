@@ -323,3 +323,62 @@ fn plastic_base_agrees_with_mitsuba() {
     let f = b.eval::<3>(z, z).0[0];
     assert!((f - 0.152383).abs() < 2e-3 * 0.152383, "{f}");
 }
+
+/// A `mask` is a cut-out that rays pass: behind a quad of opacity 0.25, 3/4 of the rays
+/// (closest hits and shadow rays alike) reach the quad behind; with a bitmap of opacity,
+/// rays stop where it is white and pass where it is black (a known answer each).
+#[test]
+fn masked_quads_let_rays_through() {
+    use crate::math::Ray;
+    let dir = std::env::temp_dir().join(format!("kalos-mask-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // left half black (opacity 0), right half white (1)
+    image::GrayImage::from_fn(8, 8, |x, _| image::Luma([if x < 4 { 0 } else { 255 }]))
+        .save(dir.join("m.png"))
+        .unwrap();
+    let body = |opacity: &str| {
+        format!(
+            r#"<shape type="rectangle"><bsdf type="mask">{opacity}<bsdf type="diffuse"/></bsdf></shape>
+            <shape type="rectangle"><transform name="to_world"><translate z="-1"/></transform>
+            <bsdf type="diffuse"/></shape>"#
+        )
+    };
+    let build = |b: &str| {
+        let d = parse(
+            &format!("<scene version=\"3.0.0\">{b}</scene>"),
+            "t.xml",
+            &dir,
+        )
+        .unwrap();
+        crate::scene::Scene::build(d, 0.0).unwrap()
+    };
+    let s = build(&body(r#"<float name="opacity" value="0.25"/>"#));
+    assert!(s.cutouts);
+    let n = 40000;
+    let (mut front, mut blocked) = (0, 0);
+    for i in 0..n {
+        let x = (i % 200) as f32 / 200.0 * 1.6 - 0.8;
+        let y = (i / 200) as f32 / 200.0 * 1.6 - 0.8;
+        let r = Ray::new(Vec3::new(x, y, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        let h = s.intersect(&r, f32::INFINITY).expect("the back quad is behind");
+        front += (h.p.z.abs() < 1e-3) as usize;
+        blocked += s.occluded(&r, 1.5) as usize;
+    }
+    let (f, b) = (front as f32 / n as f32, blocked as f32 / n as f32);
+    assert!((f - 0.25).abs() < 0.01, "closest hits on the mask: {f}");
+    assert!((b - 0.25).abs() < 0.01, "shadow rays stopped by the mask: {b}");
+    let s = build(&body(
+        r#"<texture type="bitmap" name="opacity"><string name="filename" value="m.png"/>
+           <string name="filter_type" value="nearest"/></texture>"#,
+    ));
+    for (x, on_mask) in [(-0.5, false), (0.5, true)] {
+        for k in 0..50 {
+            let y = k as f32 / 50.0 - 0.5;
+            let r = Ray::new(Vec3::new(x, y, 1.0), Vec3::new(0.0, 0.0, -1.0));
+            let h = s.intersect(&r, f32::INFINITY).unwrap();
+            assert_eq!(h.p.z.abs() < 1e-3, on_mask, "x {x} y {y}");
+            assert_eq!(s.occluded(&r, 1.5), on_mask, "x {x} y {y}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
