@@ -19,6 +19,7 @@ pub use texture::Texture;
 
 use crate::accel::Bvh;
 use crate::light::Lights;
+use crate::material::dielectric::Tint;
 use crate::material::{AlbedoTable, Bsdf, Distribution, Material};
 use crate::math::{Bounds3, Vec2, Vec3};
 use std::path::{Path, PathBuf};
@@ -85,14 +86,15 @@ pub enum SurfaceModel {
         nonlinear: bool,
     },
     /// `dielectric` / `roughdielectric`: an interface of relative index `eta` (inside over
-    /// outside).
+    /// outside), its reflection and transmission scaled by `tint`.
     Dielectric {
         eta: f32,
         alpha: f32,
         distribution: Distribution,
+        tint: Tint,
     },
     /// `thindielectric`: a thin slab of index `eta` (no refraction of the direction).
-    ThinDielectric { eta: f32 },
+    ThinDielectric { eta: f32, tint: Tint },
 }
 
 impl SurfaceModel {
@@ -540,6 +542,7 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             eta,
             alpha,
             distribution,
+            tint,
         } => {
             if !eta_ok(eta) {
                 return Err(format!(
@@ -549,21 +552,34 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             if !alpha_ok(alpha) {
                 return Err(format!("alpha {alpha}: must be in [0, 4]"));
             }
+            if !(finite(&tint.reflect) && finite(&tint.transmit)) {
+                return Err(
+                    "specular_reflectance and specular_transmittance must be finite and non-negative"
+                        .into(),
+                );
+            }
             if alpha > 0.0 {
                 Bsdf::RoughDielectric(RoughDielectric {
                     eta,
                     alpha,
                     dist: distribution,
+                    tint,
                 })
             } else {
-                Bsdf::Dielectric(Dielectric { eta })
+                Bsdf::Dielectric(Dielectric { eta, tint })
             }
         }
-        SurfaceModel::ThinDielectric { eta } => {
+        SurfaceModel::ThinDielectric { eta, tint } => {
             if !(eta.is_finite() && eta > 0.0) {
                 return Err(format!("eta {eta}: must be positive"));
             }
-            Bsdf::ThinDielectric(ThinDielectric { eta })
+            if !(finite(&tint.reflect) && finite(&tint.transmit)) {
+                return Err(
+                    "specular_reflectance and specular_transmittance must be finite and non-negative"
+                        .into(),
+                );
+            }
+            Bsdf::ThinDielectric(ThinDielectric { eta, tint })
         }
     })
 }

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::material::conductor::fresnel_conductor;
-use crate::material::dielectric::fresnel_dielectric;
+use crate::material::dielectric::{fresnel_dielectric, Tint};
 use crate::scene::texture::OpacityFrom;
 
 /// A normalized-Phong exponent with about the spread of a GGX lobe of roughness alpha.
@@ -262,17 +262,13 @@ impl<'a> Loader<'a> {
                     (0.0, Distribution::default())
                 };
                 let eta = self.ior(el, "int_ior", "bk7")? / self.ior(el, "ext_ior", "air")?;
-                for k in ["specular_reflectance", "specular_transmittance"] {
+                let mut tint = Tint::NONE;
+                for (k, v) in [
+                    ("specular_reflectance", &mut tint.reflect),
+                    ("specular_transmittance", &mut tint.transmit),
+                ] {
                     if let Some(c) = self.constant(el, k, Use::Reflectance, kind)? {
-                        if c != [1.0; 3] {
-                            self.warn(
-                                &format!("{kind} {k}"),
-                                format!(
-                                    "{}: {kind} {k} other than 1 is not supported: rendered as 1",
-                                    el.at
-                                ),
-                            );
-                        }
+                        *v = c;
                     }
                 }
                 m.kd = [0.0; 3];
@@ -280,13 +276,14 @@ impl<'a> Loader<'a> {
                 if kind == "thindielectric" {
                     // no refraction of the direction: an index of 1 (see-through) is closest
                     m.ni = 1.0;
-                    m.model = Some(SurfaceModel::ThinDielectric { eta });
+                    m.model = Some(SurfaceModel::ThinDielectric { eta, tint });
                 } else {
                     m.ni = eta;
                     m.model = Some(SurfaceModel::Dielectric {
                         eta,
                         alpha,
                         distribution,
+                        tint,
                     });
                 }
             }

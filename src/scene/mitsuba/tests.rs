@@ -307,7 +307,7 @@ fn camera_follows_mitsuba_conventions() {
 /// Mitsuba 3.9.1 (scalar_rgb) evaluates `plastic` (diffuse_reflectance 0.5, int_ior 1.9)
 /// at normal incidence, wo = wi = n, to f cos = 0.152383: the reader keeps the diffuse
 /// reflectance as given and the Plastic model applies the coat once (it was applied
-/// twice, a 0.29x darker base).
+/// twice: 0.96x at this index, 1.02x at 1.5).
 #[test]
 fn plastic_base_agrees_with_mitsuba() {
     let d = scene(
@@ -381,4 +381,54 @@ fn masked_quads_let_rays_through() {
         }
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Mitsuba 3.9.1 (scalar_rgb) samples a `dielectric` of int_ior 1.5 with
+/// specular_reflectance (0.2, 0.4, 0.6) and specular_transmittance (0.9, 0.5, 0.1) at
+/// normal incidence to weights (0.2, 0.4, 0.6) reflected and (0.400222, 0.222345,
+/// 0.0444691) = (0.9, 0.5, 0.1) / eta^2 refracted (radiance mode); the rough and thin ones scale their lobes the same way
+/// (the tints were warned and rendered as 1).
+#[test]
+fn dielectric_tints_scale_reflection_and_transmission() {
+    let tints = r#"<rgb name="specular_reflectance" value="0.2 0.4 0.6"/>
+        <rgb name="specular_transmittance" value="0.9 0.5 0.1"/>"#;
+    let bsdf = |kind: &str, extra: &str| {
+        let d = scene(&format!(
+            r#"<shape type="rectangle"><bsdf type="{kind}">{tints}{extra}</bsdf></shape>"#
+        ))
+        .unwrap();
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+        let m = d.materials.last().unwrap();
+        crate::scene::bsdf_of_model(m.model.as_ref().unwrap(), m.kd).unwrap()
+    };
+    let wo = Vec3::Z;
+    let b = bsdf("dielectric", r#"<float name="int_ior" value="1.5"/>"#);
+    let r = b.sample::<3>(wo, 0.0, Vec2::ZERO).unwrap();
+    assert!(r.wi.z > 0.0);
+    assert_eq!(r.weight.0, [0.2, 0.4, 0.6]);
+    let t = b.sample::<3>(wo, 0.99, Vec2::ZERO).unwrap();
+    assert!(t.wi.z < 0.0);
+    // Mitsuba's weights (eta = 1.5 / 1.000277, the index of air)
+    for (w, m) in t.weight.0.iter().zip([0.400222, 0.222345, 0.0444691]) {
+        assert!((w - m).abs() < 2e-6, "{w}");
+    }
+    let b = bsdf("thindielectric", "");
+    assert_eq!(b.sample::<3>(wo, 0.0, Vec2::ZERO).unwrap().weight.0, [0.2, 0.4, 0.6]);
+    assert_eq!(b.sample::<3>(wo, 0.99, Vec2::ZERO).unwrap().weight.0, [0.9, 0.5, 0.1]);
+    // rough: the same lobes as without tints, each scaled by its tint
+    let rough = bsdf("roughdielectric", r#"<float name="alpha" value="0.3"/>"#);
+    let plain = scene(r#"<shape type="rectangle"><bsdf type="roughdielectric"><float name="alpha" value="0.3"/></bsdf></shape>"#).unwrap();
+    let pm = plain.materials.last().unwrap();
+    let plain = crate::scene::bsdf_of_model(pm.model.as_ref().unwrap(), pm.kd).unwrap();
+    let wo = Vec3::new(0.3, 0.0, 0.9).normalize();
+    for (wi, tint) in [
+        (Vec3::new(-0.2, 0.1, 0.95).normalize(), [0.2, 0.4, 0.6]),
+        (Vec3::new(-0.2, 0.1, -0.95).normalize(), [0.9, 0.5, 0.1]),
+    ] {
+        let (f, g) = (rough.eval::<3>(wo, wi).0, plain.eval::<3>(wo, wi).0);
+        assert!(g[0] > 0.0);
+        for c in 0..3 {
+            assert!((f[c] - g[c] * tint[c]).abs() <= 1e-6 * g[c], "{f:?} {g:?}");
+        }
+    }
 }
