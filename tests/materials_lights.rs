@@ -94,10 +94,13 @@ fn lossless_interfaces_under_a_white_sky_are_white() {
                 tint: Tint::NONE,
             },
         ),
-        ("thindielectric", SurfaceModel::ThinDielectric {
+        (
+            "thindielectric",
+            SurfaceModel::ThinDielectric {
                 eta: 1.5,
                 tint: Tint::NONE,
-            }),
+            },
+        ),
         ("perfect conductor", perfect_mirror),
     ] {
         let scene = sphere_scene(model(m, 0.5));

@@ -307,8 +307,7 @@ impl<'a> Loader<'a> {
                             None => inner_m.opacity *= 0.5,
                             Some(Color::Rgb(v)) => inner_m.opacity *= (v[0] + v[1] + v[2]) / 3.0,
                             Some(Color::Bitmap(p, sampling)) => {
-                                inner_m.map_opacity =
-                                    Some((p, sampling, OpacityFrom::Luminance));
+                                inner_m.map_opacity = Some((p, sampling, OpacityFrom::Luminance));
                             }
                         }
                     }

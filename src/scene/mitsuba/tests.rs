@@ -360,13 +360,18 @@ fn masked_quads_let_rays_through() {
         let x = (i % 200) as f32 / 200.0 * 1.6 - 0.8;
         let y = (i / 200) as f32 / 200.0 * 1.6 - 0.8;
         let r = Ray::new(Vec3::new(x, y, 1.0), Vec3::new(0.0, 0.0, -1.0));
-        let h = s.intersect(&r, f32::INFINITY).expect("the back quad is behind");
+        let h = s
+            .intersect(&r, f32::INFINITY)
+            .expect("the back quad is behind");
         front += (h.p.z.abs() < 1e-3) as usize;
         blocked += s.occluded(&r, 1.5) as usize;
     }
     let (f, b) = (front as f32 / n as f32, blocked as f32 / n as f32);
     assert!((f - 0.25).abs() < 0.01, "closest hits on the mask: {f}");
-    assert!((b - 0.25).abs() < 0.01, "shadow rays stopped by the mask: {b}");
+    assert!(
+        (b - 0.25).abs() < 0.01,
+        "shadow rays stopped by the mask: {b}"
+    );
     let s = build(&body(
         r#"<texture type="bitmap" name="opacity"><string name="filename" value="m.png"/>
            <string name="filter_type" value="nearest"/></texture>"#,
@@ -413,8 +418,14 @@ fn dielectric_tints_scale_reflection_and_transmission() {
         assert!((w - m).abs() < 2e-6, "{w}");
     }
     let b = bsdf("thindielectric", "");
-    assert_eq!(b.sample::<3>(wo, 0.0, Vec2::ZERO).unwrap().weight.0, [0.2, 0.4, 0.6]);
-    assert_eq!(b.sample::<3>(wo, 0.99, Vec2::ZERO).unwrap().weight.0, [0.9, 0.5, 0.1]);
+    assert_eq!(
+        b.sample::<3>(wo, 0.0, Vec2::ZERO).unwrap().weight.0,
+        [0.2, 0.4, 0.6]
+    );
+    assert_eq!(
+        b.sample::<3>(wo, 0.99, Vec2::ZERO).unwrap().weight.0,
+        [0.9, 0.5, 0.1]
+    );
     // rough: the same lobes as without tints, each scaled by its tint
     let rough = bsdf("roughdielectric", r#"<float name="alpha" value="0.3"/>"#);
     let plain = scene(r#"<shape type="rectangle"><bsdf type="roughdielectric"><float name="alpha" value="0.3"/></bsdf></shape>"#).unwrap();
