@@ -107,7 +107,8 @@ impl Scene {
             // on through the surface: from just behind it, along the same direction
             let o = offset_origin(h.p, h.n.normalize_or_zero(), ray.d);
             t_base = (o - ray.o).dot(ray.d) / ray.d.length_squared();
-            if !(t_base < t_max) {
+            // (a NaN from a zero direction ends the ray too)
+            if t_base >= t_max || t_base.is_nan() {
                 return None;
             }
             r = Ray::new(o, ray.d);
