@@ -1,4 +1,4 @@
-//! Writes a large OBJ for the loading/BVH/memory benchmark in the README:
+//! Writes a large OBJ for the loading/BVH/memory benchmark (docs/results/throughput.md):
 //! a closed room (inward-facing walls, one ceiling light) holding a grid of finely
 //! tessellated bumpy spheres. `cargo run --release --example gen_mesh -- OUT.obj [TRIANGLES]`
 use std::f32::consts::PI;

@@ -554,7 +554,7 @@ mod tests {
     use super::*;
     use crate::integrator::{BsdfSelect, RrMode, RrWeight};
 
-    /// The defaults, as documented in the README and `--help`: written once (clap
+    /// The defaults, as documented in docs/guide/cli.md and `--help`: written once (clap
     /// attributes), read by the CLI, the library's `Default` and serde alike.
     #[test]
     fn defaults_are_the_documented_ones_everywhere() {

@@ -15,7 +15,7 @@
 //! Traversal: one ray at a time, the 8 boxes of a node per slab test (one
 //! AVX2 test, or two 4-wide glam `Vec4` ones: SSE2 on x86-64, NEON on
 //! aarch64) and 4 triangles per SIMD triangle test (a leaf's two packets in one
-//! AVX2 test: room 1.015x, Cornell box 1.012x, stop 33), no
+//! AVX2 test: room 1.015x, Cornell box 1.012x, 2026-12-05 (b4ac6ed)), no
 //! heap allocation, a fixed-size uninitialised stack sized from the tree at
 //! build time, and children visited nearest-first for closest-hit queries.
 //! The slab test reads each axis' near and far planes by the ray's octant
@@ -24,7 +24,7 @@
 //! On large trees traversal waits on memory: the children a node query will
 //! visit later are prefetched when they are pushed, and on Linux the node and
 //! triangle arrays are copied onto transparent huge pages (`madvise`): fewer pages
-//! to translate (random rays on a 1M-triangle height field 1.00-1.12x as fast, stop 31;
+//! to translate (random rays on a 1M-triangle height field 1.00-1.12x as fast, 2026-12-04 (4a6faaf);
 //! this VM's `perf` has no TLB counters to show the misses themselves).
 //!
 //! Run-time dispatch ([`Isa`]): the same traversal code is compiled twice, for
@@ -741,7 +741,7 @@ pub enum RayAnswer {
 }
 
 /// Queries [`Bvh::trace`] keeps in flight at once. On the 1M-triangle room at two
-/// threads (stop 27, after the hit record moved to the BVH's packets), 64 against 32:
+/// threads (2026-12-03, c7f9453, after the hit record moved to the BVH's packets), 64 against 32:
 /// 1.079x, every round above 1.05; 96: 1.02x (noise); 128: 0.94x.
 pub const BATCH: usize = 64;
 
@@ -1140,9 +1140,9 @@ impl Bvh {
     /// answer them one after another, which still pays over queries spread among the
     /// shading of their paths: the traversal's code and branch history stay warm (stop
     /// 29, two threads: the room of `bench/compare-mitsuba.sh` 1.08x paths/s, the
-    /// Cornell box 1.08x; `docs/results/throughput/ab-*-2threads-seq-stop29.txt`). Both
+    /// Cornell box 1.08x; `docs/results/throughput/ab-*-2threads-seq-2026-12-04-6d98280.txt`). Both
     /// ways set up every query's state first, in one loop (then one after another:
-    /// Cornell box 1.03x, room 1.02x, `ab-*-2threads-setup-first-stop29.txt`).
+    /// Cornell box 1.03x, room 1.02x, `ab-*-2threads-setup-first-2026-12-04-2e0c719.txt`).
     pub fn trace(&self, queries: &[RayQuery], answers: &mut [RayAnswer]) {
         assert_eq!(queries.len(), answers.len(), "one answer per query");
         if self.tris.is_empty() {
@@ -1163,7 +1163,7 @@ impl Bvh {
     /// The queries with the smallest traversal stack the tree allows (as
     /// `intersect_sized`). Each stack size is a function of its own, so that a small
     /// tree's call does not reserve, and probe page by page, the frame of a large one: 64
-    /// queries' 448-entry stacks made a 236 KiB frame (stop 33: the Cornell box 1.060x).
+    /// queries' 448-entry stacks made a 236 KiB frame (2026-12-05, b4ac6ed: the Cornell box 1.060x).
     #[inline(always)]
     fn trace_sized(&self, q: &[RayQuery], a: &mut [RayAnswer], il: bool) {
         if self.stack_needed <= TINY_STACK {
@@ -1336,7 +1336,7 @@ pub fn prefetch_line<T>(p: *const T) {
 ///
 /// The hint must come before the pages are first touched: memory that is already
 /// mapped keeps its 4 KiB pages. The allocator may hand out such memory (glibc's
-/// per-thread arenas reuse what the build freed: stop 31 found the old hint, given to
+/// per-thread arenas reuse what the build freed: the work of 2026-12-04 (4a6faaf) found the old hint, given to
 /// the build's own vectors, never took effect), so the new allocation's pages are
 /// also released (`MADV_DONTNEED`) before the copy writes them, and the copy's first
 /// touch then maps huge pages. A hint only: failures are ignored.

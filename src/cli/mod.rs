@@ -5,6 +5,7 @@ pub mod experiment;
 pub mod filter;
 pub mod progress;
 pub mod radiosity;
+pub mod reference;
 pub mod render;
 
 use clap::{Parser, Subcommand};

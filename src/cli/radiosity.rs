@@ -1,4 +1,4 @@
-//! `kalos radiosity SCENE -o out.ply`: the radiosity preprocess alone (issue 9), its
+//! `kalos radiosity SCENE -o out.ply`: the radiosity preprocess alone, its
 //! meshed solution written as a vertex-coloured PLY, its figures as JSON (`--stats`).
 
 use crate::radiosity::{ply, RadiositySettings, RadiosityStats, Solution};

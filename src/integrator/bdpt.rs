@@ -955,5 +955,6 @@ pub fn light_path_sample<const N: usize>(
     }
 }
 
+pub mod passes;
 #[cfg(test)]
 mod tests;

@@ -43,7 +43,7 @@
 //! gather's rays are never rouletted at x. Why K > 1: on `rw-room` the gather's noise is
 //! almost all in the first-bounce hemisphere (direct light from NEE has 0.3% of its
 //! variance, 128x128, 256 spp), and a gather ray costs one ray and one lookup against the
-//! camera ray, shadow ray and sampler work every trial pays (README).
+//! camera ray, shadow ray and sampler work every trial pays (docs/results/rushmeier-ward.md).
 //!
 //! Known approximations, both of the radiosity solution: B is the diffuse (Kd) part only,
 //! so the glossy reflection of a receiver y is missing from the lookup; and B is the mesh's
@@ -66,7 +66,7 @@ use crate::scene::Scene;
 use crate::spectrum::Spectrum;
 use glam::Vec2;
 
-/// Gather rays per gather vertex unless `--gather-rays` says (measured: README).
+/// Gather rays per gather vertex unless `--gather-rays` says (measured: docs/results/rushmeier-ward.md).
 pub const DEFAULT_GATHER_RAYS: u32 = 2;
 /// More gather rays than this are refused.
 pub const MAX_GATHER_RAYS: u32 = 4096;

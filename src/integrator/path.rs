@@ -105,8 +105,8 @@ pub fn radiance_batch<const N: usize>(
         // The hits' triangle data is asked for before the paths read it, where the scene
         // is too large for the caches (as the BVH, `Bvh::interleaves`). On smaller scenes
         // it is in the caches already and the loop only costs time: without it the Cornell
-        // box 1.027x and 1.042x (8 rounds each, two threads), the room 1.006x (stop 33,
-        // `docs/results/throughput/ab-hit-prefetch-stop33.txt`).
+        // box 1.027x and 1.042x (8 rounds each, two threads), the room 1.006x (2026-12-05, b4ac6ed,
+        // `docs/results/throughput/ab-hit-prefetch-2026-12-04-477fc55.txt`).
         if scene.bvh.interleaves() {
             for a in &ans[..k] {
                 if let RayAnswer::Closest(Some(h)) = a {

@@ -1,6 +1,6 @@
 //! Cycle counts of [`super::path::radiance_batch`]'s phases, for throughput work: this
 //! project's machines run `perf` with the clock as its only event, whose samples skid onto
-//! the wrong instructions (stop 33), so the time-stamp counter is read at each phase's end
+//! the wrong instructions (2026-12-05, b4ac6ed), so the time-stamp counter is read at each phase's end
 //! instead.
 //!
 //! Built only with the cargo feature `phase-timers`
@@ -8,7 +8,7 @@
 //! empty, its calls compile to nothing and the renderer's code is as without them. A batch
 //! sums its phases in its own [`Timer`] and adds them to the process's totals once, at its
 //! end: a shared counter touched at every step, contended by two threads, halved the
-//! render's speed (stop 34). `kalos render` prints the totals ([`report`]).
+//! render's speed (2026-12-05, ad7e6d4). `kalos render` prints the totals ([`report`]).
 
 /// The phases of one step of a batch, in their order.
 #[derive(Clone, Copy)]

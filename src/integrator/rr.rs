@@ -264,7 +264,7 @@ impl Roulette {
         if self.mode.is_spectral() {
             spectral_probability(f, a, &self.weight.h::<N>())
         } else {
-            // The classic roulette: the albedo's luminance exactly as before issue 4 (raw
+            // The classic roulette: the albedo's luminance exactly as before the roulette variants (raw
             // weights, so the default renders are bit-identical), or its average.
             match self.weight {
                 RrWeight::Luminance => a.luminance(),

@@ -275,7 +275,7 @@ fn from_mtl_picks_the_model() {
     ));
 }
 
-// ---- Microfacet models (issue 14) ----
+// ---- Microfacet models ----
 
 const GGX: Distribution = Distribution::Ggx;
 const BECKMANN: Distribution = Distribution::Beckmann;

@@ -651,7 +651,7 @@ mod tests {
     /// Eq. 10 gives 185), 0.833 after Stein's second stage raised the ceiling to the 90%
     /// quantile of the needs its first Mt trials predict (1838), 0.886 at their 95%
     /// quantile and 0.902 at the 97% (`STEIN_QUANTILE`, ceiling 2707); with `--gather
-    /// radiosity` (tested here, the method as the README's tables run it) 0.883 at 4 Mt and
+    /// radiosity` (tested here, the method as the tables of docs/results/rushmeier-ward.md run it) 0.883 at 4 Mt and
     /// 0.949 at the second stage's ceiling (311, where the 90% quantile gave 212, for 7%
     /// more trials on average). The pixels that need the most are the back wall's top and
     /// the walls above the tall box (`--rw-layers`): median luminance 2.3-2.5x the others',
@@ -696,7 +696,7 @@ mod tests {
     /// paths looks converged and stops low. Measured as the image mean of rw without the
     /// filter over 8 seeds against plain path tracing with many samples; the standard
     /// error is the seeds' spread (one run's S_p underestimates it where tails are heavy).
-    /// Measured at 24x24, D 10, 10 seeds (README): the paper's per-pixel test
+    /// Measured at 24x24, D 10, 10 seeds (docs/results/rushmeier-ward.md): the paper's per-pixel test
     /// (`--rw-pixel-test`) is 1.6% low on cornell (z -5.0), the default pooled test
     /// 0.26% (z -0.8).
     fn early_stopping_z(scene: &str, pixel_test: bool, target: RwTarget) -> f64 {

@@ -141,19 +141,19 @@ pub struct DtfParams {
     /// to a category, and at low budgets the paper's 1 -> 10 step rounded most pixels up
     /// to 10 and starved the rest: on the room over BDPT at 16 spp, 6857 of 9216 pixels
     /// at 10 and the lights' edges at 20, with these categories 5-7 and 100; RMSE 0.066
-    /// -> 0.035, see the README).
+    /// -> 0.035, see docs/results/dtf.md).
     #[arg(long = "dtf-categories", value_delimiter = ',', default_values_t = [0u32, 1, 2, 3, 5, 7, 10, 14, 20, 30, 50, 70, 100, 140, 200, 300, 500])]
     pub categories: Vec<u32>,
     /// DTF: largest region side m_max (paper: 4 is enough; 8 lets flat regions average
     /// more neighbours at low N, where the weights f* allow it: cornell 128x128, 64 and 256
-    /// spp, perceptual error 0.76x -> 0.72x and 0.67x -> 0.61x of plain, see the README).
+    /// spp, perceptual error 0.76x -> 0.72x and 0.67x -> 0.61x of plain, see docs/results/dtf.md).
     #[arg(long = "dtf-mmax", default_value_t = 8)]
     pub m_max: u32,
     /// DTF: minimal decrease Delta f[0]_min of the primary weight f*[0] to grow a region
     /// (paper: 0.01). With 0.01 a flat region of equal weights stops between 6x6 and 7x7
     /// whatever --dtf-mmax (1/36 - 1/49 < 0.01); 0 lets the weights f* alone bound it, which
     /// pays at high resolution (caustic 288x288 at 64 spp with --dtf-mmax 16: perceptual error
-    /// 0.70x -> 0.53x of BDPT, see the README) and costs RMSE at low resolution.
+    /// 0.70x -> 0.53x of BDPT, see docs/results/bdpt.md) and costs RMSE at low resolution.
     #[arg(long = "dtf-df0", default_value_t = 0.01, allow_hyphen_values = true)]
     pub df0_min: f32,
     /// DTF: display C = (C_d n + C_i N)/(n + N) with C_d as phase 1 gave it (the
@@ -219,7 +219,7 @@ pub struct DtfParams {
     /// DTF: a region stops growing at a neighbour whose N exceeds this multiple of the
     /// pixel's own (1 = the paper's rule "N[p] < N[q]"; without it, the default, no such
     /// stop).
-    /// Measured without it (README): over BDPT the caustic's image mean at 64 spp went from
+    /// Measured without it (docs/results/dtf.md): over BDPT the caustic's image mean at 64 spp went from
     /// 0.964-0.973 of the reference to 0.988-0.997 (seeds 1-2) and its pixels more than 5%
     /// off from 81% to 73%; cornell (path tracing, 64 spp) had 1 point fewer of them. sigma from n samples is
     /// noisy, so neighbours on one flat surface land categories apart, and the rule cut
@@ -273,7 +273,7 @@ impl Default for DtfParams {
 impl DtfParams {
     /// n for a budget: `--dtf-n` if given; else 2 sqrt(spp) of an average spp budget within
     /// 8..50 (cornell 128x128 at 256 spp: n = 16, 32, 50 gave perceptual errors 0.58x,
-    /// 0.60x, 0.66x of plain and RMSE 0.29x, 0.27x, 0.29x; the README), 16 for a time
+    /// 0.60x, 0.66x of plain and RMSE 0.29x, 0.27x, 0.29x; docs/results/dtf.md), 16 for a time
     /// budget, the paper's 50 for a relative error.
     pub fn n_for(&self, spp_budget: Option<f64>, relative: bool) -> u32 {
         match (self.n, spp_budget) {

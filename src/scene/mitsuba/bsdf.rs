@@ -109,7 +109,11 @@ impl<'a> Loader<'a> {
 
     /// A BSDF element (inline or referenced) as a material description.
     pub(super) fn bsdf(&self, el: &'a El) -> R<MaterialDesc> {
-        let el = self.resolve(el)?;
+        let target = self.resolve(el)?;
+        self.building(el, target, || self.bsdf_of(target))
+    }
+
+    fn bsdf_of(&self, el: &'a El) -> R<MaterialDesc> {
         if el.tag != "bsdf" {
             return Err(format!(
                 "{}: <{}> where a <bsdf> was expected",

@@ -64,6 +64,9 @@ struct Loader<'a> {
     warnings: RefCell<Vec<String>>,
     sensor_seen: bool,
     default_material: Option<u32>,
+    /// The BSDFs and textures being built, innermost last: a `<ref>` back to one of them
+    /// is a cycle.
+    building: RefCell<Vec<*const El>>,
 }
 
 type R<T> = Result<T, String>;
@@ -118,11 +121,17 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
 }
 
 fn parse_inner(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
+    let top_file = Path::new(file);
     let mut reader = Reader {
         defaults: HashMap::new(),
+        chain: vec![top_file
+            .canonicalize()
+            .unwrap_or_else(|_| top_file.to_path_buf())],
+        includes: 0,
+        bytes: text.len() as u64,
         warnings: Vec::new(),
     };
-    let top = reader.read_text(text, file, dir, 0)?;
+    let top = reader.read_text(text, file, dir)?;
     let mut ld = Loader {
         dir: dir.to_path_buf(),
         desc: SceneDesc {
@@ -144,6 +153,7 @@ fn parse_inner(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> 
         warnings: RefCell::new(reader.warnings),
         sensor_seen: false,
         default_material: None,
+        building: RefCell::new(Vec::new()),
     };
     // every element with an id, at any depth
     fn collect<'a>(els: &'a [El], ids: &mut HashMap<&'a str, &'a El>) -> R<()> {

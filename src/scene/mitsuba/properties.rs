@@ -7,6 +7,9 @@ use super::*;
 // Values
 // ----------------------------------------------------------------------------------------
 
+/// How deep BSDFs and textures may nest, references followed.
+const MAX_BUILD_DEPTH: usize = 64;
+
 /// Numbers in an attribute: separated by commas and/or white space.
 pub(super) fn numbers(s: &str) -> Option<Vec<f32>> {
     s.split(|c: char| c == ',' || c.is_whitespace())
@@ -27,6 +30,35 @@ impl<'a> Loader<'a> {
             .get(id)
             .copied()
             .ok_or_else(|| format!("{}: <ref id=\"{id}\">: no element has that id", el.at))
+    }
+
+    /// `build(target)` for the element `el` names (itself, or what its `<ref>` resolves
+    /// to), refusing a reference cycle and nesting deeper than `MAX_BUILD_DEPTH` (both
+    /// would otherwise recurse without end).
+    pub(super) fn building<T>(&self, el: &El, target: &El, build: impl FnOnce() -> R<T>) -> R<T> {
+        let key = target as *const El;
+        let depth = {
+            let mut b = self.building.borrow_mut();
+            if b.contains(&key) {
+                let id = target.attr("id").unwrap_or("");
+                return Err(format!(
+                    "{}: <ref id=\"{id}\">: a cycle: the <{}> at {} contains a reference to itself",
+                    el.at, target.tag, target.at
+                ));
+            }
+            b.push(key);
+            b.len()
+        };
+        let r = if depth > MAX_BUILD_DEPTH {
+            Err(format!(
+                "{}: <{}>: bsdfs and textures nested (through references) more than {MAX_BUILD_DEPTH} deep",
+                el.at, target.tag
+            ))
+        } else {
+            build()
+        };
+        self.building.borrow_mut().pop();
+        r
     }
 
     /// The property child named `name` (marked as read).
@@ -209,6 +241,14 @@ impl<'a> Loader<'a> {
                         .attr("value")
                         .ok_or_else(|| format!("{}: <matrix> needs a value", op.at))?;
                     match numbers(v) {
+                        // an affine transform: a projective last row would be dropped by
+                        // every point transform below, so it is refused, not ignored
+                        Some(n) if n.len() == 16 && n[12..] != [0.0, 0.0, 0.0, 1.0] => {
+                            return Err(format!(
+                                "{}: <matrix>: the last row is ({}, {}, {}, {}): kalos reads affine transforms (0, 0, 0, 1), not projective ones",
+                                op.at, n[12], n[13], n[14], n[15]
+                            ))
+                        }
                         Some(n) if n.len() == 16 => {
                             Mat4::from_cols_array(&n.try_into().unwrap()).transpose()
                         }

@@ -6,6 +6,94 @@ use super::*;
 /// Mitsuba's `<include>` nesting limit (its parser's `max_include_depth`).
 pub(super) const MAX_INCLUDE_DEPTH: usize = 15;
 
+/// How deep elements may nest. Mitsuba's deepest real forms (a shape holding a twosided
+/// around a bumpmap around a bsdf holding a texture with a transform) stay under 12.
+pub(super) const MAX_ELEMENT_DEPTH: usize = 64;
+
+/// How many `<include>`s a whole scene may read, counting repeats: includes nested
+/// `MAX_INCLUDE_DEPTH` deep may still fan out exponentially (each file including the next
+/// several times).
+pub(super) const MAX_INCLUDES: usize = 4096;
+
+/// How many attributes one element may have (Mitsuba's have at most a handful).
+pub(super) const MAX_ATTRIBUTES: usize = 256;
+
+/// Refuse an element with more than `MAX_ATTRIBUTES` attributes before roxmltree reads
+/// the text: its check for duplicate attributes compares each with all before it, so an
+/// element of 200,000 attributes would take hours. One pass over the bytes, counting the
+/// `=` outside quotes of each tag (comments, CDATA, declarations and processing
+/// instructions skipped); malformed text is left for the parser to report.
+fn check_attribute_counts(text: &str, file: &str) -> Result<(), String> {
+    let b = text.as_bytes();
+    let (mut i, mut line) = (0usize, 1usize);
+    let skip_to = |from: usize, end: &str| {
+        text[from..]
+            .find(end)
+            .map_or(b.len(), |k| from + k + end.len())
+    };
+    while i < b.len() {
+        match b[i] {
+            b'\n' => {
+                line += 1;
+                i += 1;
+            }
+            b'<' => {
+                let rest = &text[i..];
+                let end = if rest.starts_with("<!--") {
+                    Some("-->")
+                } else if rest.starts_with("<![CDATA[") {
+                    Some("]]>")
+                } else if rest.starts_with("<?") {
+                    Some("?>")
+                } else if rest.starts_with("<!") {
+                    Some(">")
+                } else {
+                    None
+                };
+                if let Some(end) = end {
+                    let j = skip_to(i, end);
+                    line += text[i..j].matches('\n').count();
+                    i = j;
+                    continue;
+                }
+                let (start_line, mut quote, mut count) = (line, 0u8, 0usize);
+                i += 1;
+                while i < b.len() && !(quote == 0 && b[i] == b'>') {
+                    match b[i] {
+                        b'\n' => line += 1,
+                        b'"' | b'\'' if quote == 0 => quote = b[i],
+                        q if q == quote => quote = 0,
+                        b'=' if quote == 0 => count += 1,
+                        _ => {}
+                    }
+                    i += 1;
+                }
+                if count > MAX_ATTRIBUTES {
+                    return Err(format!(
+                        "{file}:{start_line}: an element with {count} attributes (at most {MAX_ATTRIBUTES})"
+                    ));
+                }
+            }
+            _ => i += 1,
+        }
+    }
+    Ok(())
+}
+
+/// Line numbers by binary search over the text's line starts: roxmltree's `text_pos_at`
+/// scans from the start of the text, which made reading N elements take time N^2.
+struct Lines(Vec<usize>);
+
+impl Lines {
+    fn new(text: &str) -> Self {
+        Lines(text.match_indices('\n').map(|(i, _)| i).collect())
+    }
+    /// The 1-based line of byte offset `pos`.
+    fn row(&self, pos: usize) -> usize {
+        self.0.partition_point(|&nl| nl < pos) + 1
+    }
+}
+
 /// An XML element with its attributes after `$name` substitution.
 #[derive(Debug)]
 pub(super) struct El {
@@ -92,6 +180,11 @@ pub(super) fn diffuse_reflectance_alias(attrs: &[(String, String)], children: &m
 
 pub(super) struct Reader {
     pub(super) defaults: HashMap<String, String>,
+    /// The files being read, outermost first (canonical paths): a cycle is refused.
+    pub(super) chain: Vec<PathBuf>,
+    /// Includes read so far, and the bytes of every file read.
+    pub(super) includes: usize,
+    pub(super) bytes: u64,
     /// Warnings found while reading (unknown version, ...).
     pub(super) warnings: Vec<String>,
 }
@@ -129,26 +222,70 @@ impl Reader {
         Ok(out)
     }
 
-    /// Read `path` (a `<scene>`), returning its children with includes spliced in.
-    pub(super) fn read_file(&mut self, path: &Path, depth: usize) -> Result<Vec<El>, String> {
-        let text = crate::input::read_text(path)?;
+    /// The elements of an included file (`what` names the `<include>` for messages). The
+    /// include chain, the number of includes and the bytes read are bounded: a cycle, a
+    /// chain deeper than Mitsuba's, or a fan-out past the totals is one clear error.
+    fn include(&mut self, path: &Path, what: &str) -> Result<Vec<El>, String> {
+        let real = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+        if let Some(i) = self.chain.iter().position(|c| *c == real) {
+            let cycle: Vec<String> = self.chain[i..]
+                .iter()
+                .chain([&real])
+                .map(|c| {
+                    c.file_name()
+                        .unwrap_or_default()
+                        .to_string_lossy()
+                        .into_owned()
+                })
+                .collect();
+            return Err(format!(
+                "{what}: the file includes itself ({})",
+                cycle.join(" -> ")
+            ));
+        }
+        if self.chain.len() >= MAX_INCLUDE_DEPTH {
+            return Err(format!(
+                "{what}: includes nested more than {MAX_INCLUDE_DEPTH} deep"
+            ));
+        }
+        self.includes += 1;
+        if self.includes > MAX_INCLUDES {
+            return Err(format!(
+                "{what}: the scene reads more than {MAX_INCLUDES} includes (counting repeats)"
+            ));
+        }
+        let text = crate::input::read_text(path).map_err(|e| format!("{what}: {e}"))?;
+        self.bytes += text.len() as u64;
+        let limit = crate::input::max_input_bytes()?;
+        if self.bytes > limit {
+            return Err(format!(
+                "{what}: the scene's files total more than the input limit of {}",
+                crate::input::human_size(limit)
+            ));
+        }
         let file = path.display().to_string();
         let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-        self.read_text(&text, &file, &dir, depth)
+        self.chain.push(real);
+        let els = self.read_text(&text, &file, &dir);
+        self.chain.pop();
+        els
     }
 
+    /// The elements of a `<scene>`'s text, includes spliced in; `file` names it in
+    /// messages and relative names resolve against `dir`.
     pub(super) fn read_text(
         &mut self,
         text: &str,
         file: &str,
         dir: &Path,
-        depth: usize,
     ) -> Result<Vec<El>, String> {
         let text = crate::input::clean_text(text);
+        check_attribute_counts(&text, file)?;
         // no DTDs (Mitsuba files have none; entity expansion is not worth the risk)
         let doc = roxmltree::Document::parse(&text).map_err(|e| xml_error(file, &e))?;
         let root = doc.root_element();
-        let at = |n: &roxmltree::Node| format!("{file}:{}", doc.text_pos_at(n.range().start).row);
+        let lines = Lines::new(&text);
+        let at = |n: &roxmltree::Node| format!("{file}:{}", lines.row(n.range().start));
         if root.tag_name().name() != "scene" {
             return Err(format!(
                 "{}: the root element is <{}>: a Mitsuba scene is a <scene version=\"...\"> element",
@@ -201,31 +338,32 @@ impl Reader {
                         .attribute("filename")
                         .ok_or_else(|| format!("{here}: <include> needs a filename attribute"))?;
                     let name = self.substitute(name, &here)?;
-                    if depth + 1 > MAX_INCLUDE_DEPTH {
-                        return Err(format!(
-                            "{here}: <include filename=\"{name}\">: includes nested more than {MAX_INCLUDE_DEPTH} deep (a cycle?)"
-                        ));
-                    }
                     let p = crate::scene::mtl::normalise_path(dir, &name);
-                    let children = self
-                        .read_file(&p, depth + 1)
-                        .map_err(|e| format!("{here}: <include>: {e}"))?;
-                    out.extend(children);
+                    out.extend(
+                        self.include(&p, &format!("{here}: <include filename=\"{name}\">"))?,
+                    );
                 }
-                _ => out.push(self.convert(n, &doc, file, upgrade)?),
+                _ => out.push(self.convert(n, &lines, file, upgrade, 1)?),
             }
         }
         Ok(out)
     }
 
-    pub(super) fn convert(
+    fn convert(
         &self,
         n: roxmltree::Node,
-        doc: &roxmltree::Document,
+        lines: &Lines,
         file: &str,
         upgrade: bool,
+        depth: usize,
     ) -> Result<El, String> {
-        let at = format!("{file}:{}", doc.text_pos_at(n.range().start).row);
+        let at = format!("{file}:{}", lines.row(n.range().start));
+        if depth > MAX_ELEMENT_DEPTH {
+            return Err(format!(
+                "{at}: <{}>: elements nested more than {MAX_ELEMENT_DEPTH} deep",
+                n.tag_name().name()
+            ));
+        }
         let mut tag = n.tag_name().name().to_string();
         if tag == "lookAt" {
             tag = "lookat".into();
@@ -240,7 +378,7 @@ impl Reader {
         }
         let mut children = Vec::new();
         for c in n.children().filter(|c| c.is_element()) {
-            children.push(self.convert(c, doc, file, upgrade)?);
+            children.push(self.convert(c, lines, file, upgrade, depth + 1)?);
         }
         if upgrade && tag == "bsdf" {
             diffuse_reflectance_alias(&attrs, &mut children);

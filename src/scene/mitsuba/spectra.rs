@@ -19,6 +19,9 @@ pub(super) enum Color {
     Bitmap(PathBuf, crate::scene::texture::Sampling),
 }
 
+/// What is said of a negative colour value.
+const NEGATIVE: &str = "a negative value (reflectances, radiances and indices are non-negative)";
+
 /// CIE 15:2004 illuminant D65, 300..830 nm in 5 nm steps (normalised to 100 at 560 nm).
 pub(super) const D65: [f32; 107] = [
     0.0341, 1.6643, 3.2945, 11.7652, 20.236, 28.6447, 37.0535, 38.5011, 39.9488, 42.4302, 44.9117,
@@ -310,7 +313,11 @@ impl<'a> Loader<'a> {
     }
 
     pub(super) fn color_of(&self, p: &'a El, use_: Use) -> R<Color> {
-        let p = self.resolve(p)?;
+        let target = self.resolve(p)?;
+        self.building(p, target, || self.color_of_resolved(target, use_))
+    }
+
+    fn color_of_resolved(&self, p: &'a El, use_: Use) -> R<Color> {
         let name = p.name().unwrap_or("");
         let bad = |v: &str, what: &str| {
             format!(
@@ -334,6 +341,9 @@ impl<'a> Loader<'a> {
                         _ => return Err(bad(v, "expected 3 (or 1) finite numbers")),
                     }
                 };
+                if rgb.iter().any(|c| *c < 0.0) {
+                    return Err(bad(v, NEGATIVE));
+                }
                 if p.tag == "srgb" || v.trim().starts_with('#') {
                     rgb = rgb.map(crate::image_io::srgb_decode);
                 }
@@ -342,6 +352,7 @@ impl<'a> Loader<'a> {
             "float" => {
                 let v = self.value(p)?;
                 match numbers(v).as_deref() {
+                    Some([s]) if *s < 0.0 => Err(bad(v, NEGATIVE)),
                     Some([s]) => Ok(Color::Rgb([*s; 3])),
                     _ => Err(bad(v, "not a finite number")),
                 }
@@ -370,6 +381,9 @@ impl<'a> Loader<'a> {
                             continue;
                         }
                         match numbers(line).as_deref() {
+                            Some([_, v]) if *v < 0.0 => {
+                                return Err(format!("{}:{}: {NEGATIVE}", path.display(), i + 1))
+                            }
                             Some([l, v]) => {
                                 wl.push(*l);
                                 val.push(*v);
@@ -388,6 +402,7 @@ impl<'a> Loader<'a> {
                     let v = self.value(p)?;
                     if !v.contains(':') {
                         let s = match numbers(v).as_deref() {
+                            Some([s]) if *s < 0.0 => return Err(bad(v, NEGATIVE)),
                             Some([s]) => *s,
                             _ => return Err(bad(v, "expected a number or wavelength:value pairs")),
                         };
@@ -414,6 +429,9 @@ impl<'a> Loader<'a> {
                         };
                         if !(l.is_finite() && x.is_finite()) {
                             return Err(bad(v, "values must be finite"));
+                        }
+                        if x < 0.0 {
+                            return Err(bad(v, NEGATIVE));
                         }
                         wl.push(l);
                         val.push(x);

@@ -443,3 +443,221 @@ fn dielectric_tints_scale_reflection_and_transmission() {
         }
     }
 }
+
+// ----------------------------------------------------------------------------------------
+// Hostile input: each of these crashed, hung or rendered a wrong image before its limit
+// (a reference cycle and deep nesting overflowed the stack and aborted the test runner)
+// ----------------------------------------------------------------------------------------
+
+#[test]
+fn reference_cycles_are_an_error_not_a_stack_overflow() {
+    let one = r#"<bsdf type="twosided" id="a"><ref id="a"/></bsdf><shape type="rectangle"><ref id="a"/></shape>"#;
+    let two = r#"<bsdf type="twosided" id="a"><ref id="b"/></bsdf><bsdf type="twosided" id="b"><ref id="a"/></bsdf><shape type="rectangle"><ref id="a"/></shape>"#;
+    let tex = r#"<texture type="checkerboard" id="t"><ref name="color0" id="t"/></texture><shape type="rectangle"><bsdf type="diffuse"><ref name="reflectance" id="t"/></bsdf></shape>"#;
+    for body in [one, two, tex] {
+        let e = scene(body).unwrap_err();
+        assert!(e.contains("a cycle") && !e.contains('\n'), "{body}: {e}");
+    }
+    // a long chain of references without a cycle is bounded too
+    let mut chain = String::new();
+    for i in 0..5000 {
+        chain += &format!(
+            r#"<bsdf type="twosided" id="b{i}"><ref id="b{}"/></bsdf>"#,
+            i + 1
+        );
+    }
+    chain += r#"<bsdf type="diffuse" id="b5000"/><shape type="rectangle"><ref id="b0"/></shape>"#;
+    let e = scene(&chain).unwrap_err();
+    assert!(e.contains("more than 64 deep"), "{e}");
+}
+
+#[test]
+fn deep_nesting_is_an_error_not_a_stack_overflow() {
+    let n = 20_000;
+    let body = "<shape type=\"rectangle\">".repeat(n) + &"</shape>".repeat(n);
+    let e = scene(&body).unwrap_err();
+    assert!(e.contains("nested more than 64 deep"), "{e}");
+}
+
+/// N rectangles with area emitters: reading took time N^2 (each element's line number was
+/// counted from the start of the text); now 8 times the shapes take about 8 times as long.
+#[test]
+fn loading_is_linear_in_the_number_of_shapes() {
+    let text = |n: usize| {
+        let mut s = String::from("<scene version=\"3.0.0\">\n");
+        for i in 0..n {
+            s += &format!("<shape type=\"rectangle\"><transform name=\"to_world\"><translate x=\"{i}\"/></transform><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>\n");
+        }
+        s + "</scene>"
+    };
+    let time = |n: usize| {
+        let t = text(n);
+        (0..3)
+            .map(|_| {
+                let start = std::time::Instant::now();
+                let d = parse(&t, "big.xml", Path::new(".")).unwrap();
+                assert_eq!(d.positions.len(), 2 * n);
+                start.elapsed().as_secs_f64()
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let (small, large) = (time(6_250), time(50_000));
+    // linear: about 8; quadratic: about 64. The bound leaves room for a busy machine.
+    assert!(
+        large / small < 24.0,
+        "6,250 shapes {small:.3} s, 50,000 {large:.3} s"
+    );
+}
+
+#[test]
+fn an_element_with_too_many_attributes_is_refused_before_parsing() {
+    let attrs: Vec<String> = (0..200_000).map(|i| format!("a{i}=\"1\"")).collect();
+    let e = scene(&format!("<shape type=\"rectangle\" {}/>", attrs.join(" "))).unwrap_err();
+    assert!(
+        e.contains("t.xml:2: an element with 200001 attributes"),
+        "{e}"
+    );
+    // quotes, comments and '>' inside values do not confuse the count
+    let fine =
+        r#"<!-- a="1" b='2' --><shape type="rectangle"><string name="x" value="a>b='c'"/></shape>"#;
+    assert!(scene(fine).is_ok());
+}
+
+/// A folder of its own for include tests.
+fn include_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("kalos-xml-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn include_cycles_and_fan_out_are_bounded() {
+    let d = include_dir("includes");
+    let write = |f: &str, body: &str| {
+        std::fs::write(
+            d.join(f),
+            format!("<scene version=\"3.0.0\">{body}</scene>"),
+        )
+        .unwrap()
+    };
+    // a self-include is named once, as a cycle (the include chain was repeated 15 times)
+    write("self.xml", r#"<include filename="self.xml"/>"#);
+    let e = load(&d.join("self.xml")).unwrap_err();
+    assert!(e.contains("includes itself (self.xml -> self.xml)"), "{e}");
+    assert_eq!(e.matches("<include").count(), 1, "{e}");
+    // each file including the next four times: 4^13 reads, refused at the total
+    for i in 0..13 {
+        write(
+            &format!("f{i}.xml"),
+            &format!(r#"<include filename="f{}.xml"/>"#, i + 1).repeat(4),
+        );
+    }
+    write("f13.xml", r#"<shape type="rectangle"/>"#);
+    let start = std::time::Instant::now();
+    let e = load(&d.join("f0.xml")).unwrap_err();
+    assert!(e.contains("more than 4096 includes"), "{e}");
+    assert!(start.elapsed().as_secs_f64() < 10.0);
+    // a modest fan-out still loads: 4^3 rectangles
+    write("g.xml", &r#"<include filename="f11.xml"/>"#.repeat(1));
+    let d3 = load(&d.join("g.xml")).unwrap();
+    assert_eq!(d3.positions.len(), 2 * 16);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn negative_colours_and_projective_matrices_are_refused() {
+    for (body, needle) in [
+        (
+            r#"<shape type="rectangle"><bsdf type="diffuse"><rgb name="reflectance" value="-1"/></bsdf></shape>"#,
+            "a negative value",
+        ),
+        (
+            r#"<shape type="rectangle"><bsdf type="diffuse"><float name="reflectance" value="-0.5"/></bsdf></shape>"#,
+            "a negative value",
+        ),
+        (
+            r#"<shape type="rectangle"><bsdf type="diffuse"><spectrum name="reflectance" value="400:0.5, 700:-0.1"/></bsdf></shape>"#,
+            "a negative value",
+        ),
+        (
+            r#"<shape type="rectangle"><transform name="to_world"><matrix value="1 0 0 0 0 1 0 0 0 0 1 0 0 0 0.5 1"/></transform></shape>"#,
+            "projective",
+        ),
+    ] {
+        let e = scene(body).unwrap_err();
+        assert!(
+            e.contains(needle) && e.starts_with("t.xml:2:"),
+            "{body}: {e}"
+        );
+    }
+}
+
+/// Random scenes of nested and referencing BSDFs and textures (ids drawn from a few, so
+/// that references often form cycles; nesting up to 100 deep; includes of files that
+/// include each other): every one loads or fails with one line naming the file, and none
+/// panics or recurses without end. Seed 0x6b616c6f73, 2,000 scenes.
+#[test]
+fn fuzzed_structure_loads_or_fails_in_one_line() {
+    let mut x = 0x6b61_6c6f_73u64;
+    let mut below = |n: u64| {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x % n
+    };
+    let d = include_dir("fuzz");
+    for i in 0..4 {
+        let body: String = (0..1 + i)
+            .map(|k| format!(r#"<include filename="i{}.xml"/>"#, (i + k) % 4))
+            .collect();
+        std::fs::write(
+            d.join(format!("i{i}.xml")),
+            format!("<scene version=\"3.0.0\">{body}<shape type=\"cube\"/></scene>"),
+        )
+        .unwrap();
+    }
+    let (mut loaded, mut failed) = (0, 0);
+    for _ in 0..2000 {
+        let mut body = String::new();
+        for _ in 0..1 + below(6) {
+            let depth = 1 + below(100) as usize;
+            let mut open = Vec::new();
+            for level in 0..depth {
+                let id = below(5);
+                match below(5) {
+                    0 => body += &format!(r#"<ref id="e{id}"/>"#),
+                    1 => {
+                        body += &format!(r#"<texture type="checkerboard" id="e{id}{level}">"#);
+                        open.push("</texture>");
+                    }
+                    2 if level == 0 => body += &format!(r#"<include filename="i{id}.xml"/>"#),
+                    _ => {
+                        let kind = ["twosided", "mask", "diffuse"][below(3) as usize];
+                        let id = if below(2) == 0 {
+                            format!(r#" id="e{id}""#)
+                        } else {
+                            String::new()
+                        };
+                        body += &format!(r#"<bsdf type="{kind}"{id}>"#);
+                        open.push("</bsdf>");
+                    }
+                }
+            }
+            while let Some(c) = open.pop() {
+                body += c;
+            }
+        }
+        body += r#"<shape type="rectangle"><ref id="e0"/></shape>"#;
+        let text = format!("<scene version=\"3.0.0\">{body}</scene>");
+        let r = std::panic::catch_unwind(|| parse(&text, "f.xml", &d));
+        match r.unwrap_or_else(|_| panic!("panicked on {text}")) {
+            Ok(_) => loaded += 1,
+            Err(e) => {
+                assert!(!e.contains('\n') && e.len() < 2000, "{e}");
+                failed += 1;
+            }
+        }
+    }
+    assert!(loaded > 0 && failed > 0, "{loaded} loaded, {failed} failed");
+    let _ = std::fs::remove_dir_all(&d);
+}
