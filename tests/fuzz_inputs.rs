@@ -191,7 +191,7 @@ fn mutated_obj_never_panics() {
 fn mutated_mtl_never_panics() {
     let dir = Path::new("/nonexistent-kalos-dir");
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
-    let seed = format!("{MTL}map_Kd -s 1 1 1 -o 0 0 0 t\\x.png\n");
+    let seed = format!("{MTL}map_Kd -s 1 1 1 -o 0 0 0 t\\x.png\nd 0.4\nmap_d -imfchan m a.png\n");
     assert_eq!(mtl::parse_mtl(&seed, "fuzz.mtl", dir).unwrap().0.len(), 3);
     for _ in 0..200 {
         let text = mutate(&seed, &mut rng);
@@ -457,7 +457,10 @@ const XML: &str = r#"<scene version="3.0.0">
 <emitter type="area"><rgb name="radiance" value="1 2 3"/></emitter></shape>
 <shape type="sphere"><point name="center" x="0" y="1" z="0"/><float name="radius" value="0.5"/>
 <bsdf type="conductor"><string name="material" value="Au"/></bsdf></shape>
-<shape type="disk"><boolean name="flip_normals" value="true"/></shape>
+<shape type="disk"><boolean name="flip_normals" value="true"/>
+<bsdf type="mask"><float name="opacity" value="0.3"/><bsdf type="roughdielectric">
+<rgb name="specular_reflectance" value="0.5"/><rgb name="specular_transmittance" value="0.2 0.4 0.6"/>
+</bsdf></bsdf></shape>
 <emitter type="point"><point name="position" value="0, 1, 0"/></emitter>
 <emitter type="constant"><spectrum name="radiance" value="0.5"/></emitter>
 <sensor type="perspective"><float name="fov" value="45"/><string name="fov_axis" value="smaller"/>

@@ -8,6 +8,7 @@
 mod common;
 use common::*;
 use kalos::integrator::{BsdfSelect, Integrator, IntegratorKind, RrMode};
+use kalos::material::dielectric::Tint;
 use kalos::material::Distribution;
 use kalos::math::Vec3;
 use kalos::pipeline::Silent;
@@ -90,9 +91,16 @@ fn lossless_interfaces_under_a_white_sky_are_white() {
                 eta: 1.5,
                 alpha: 0.0,
                 distribution: Distribution::Ggx,
+                tint: Tint::NONE,
             },
         ),
-        ("thindielectric", SurfaceModel::ThinDielectric { eta: 1.5 }),
+        (
+            "thindielectric",
+            SurfaceModel::ThinDielectric {
+                eta: 1.5,
+                tint: Tint::NONE,
+            },
+        ),
         ("perfect conductor", perfect_mirror),
     ] {
         let scene = sphere_scene(model(m, 0.5));
@@ -154,6 +162,7 @@ fn white_plastic_and_rough_interfaces_under_a_white_sky() {
                 eta: 1.5,
                 alpha: 0.3,
                 distribution: Distribution::Ggx,
+                tint: Tint::NONE,
             },
             0.65,
             1.005,
@@ -165,6 +174,7 @@ fn white_plastic_and_rough_interfaces_under_a_white_sky() {
                 eta: 1.5,
                 alpha: 0.3,
                 distribution: Distribution::Beckmann,
+                tint: Tint::NONE,
             },
             0.65,
             1.005,

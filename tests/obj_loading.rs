@@ -889,3 +889,52 @@ fn toml_material_overrides_warn_like_mtl_values() {
     let w = warnings_naming(&s.warnings, "white");
     assert!(w.len() == 1 && w[0].contains("Ni 0"), "{:?}", s.warnings);
 }
+
+/// The values Blender's OBJ exporters write (`Ks 0` with `illum 2`, `Ni 1.0`, `Ni 0`, no
+/// `Ni`, `Pr 0`, `Pm 1`) build into the surfaces Blender renders, never an error: a coat
+/// of specular level 0 or of IOR 1 reflects nothing, so the base is diffuse alone.
+#[test]
+fn blender_mtl_values_render_as_blender_does() {
+    let mtl = "# Blender 4.2.0 MTL File: 'room.blend'\n# www.blender.org\n\n\
+               newmtl BackLight\nNs 250.0\nKa 1.0 1.0 1.0\nKd 0.8 0.8 0.8\nKs 0.000000 0.000000 0.000000\nKe 0 0 0\nNi 1.45\nd 1.0\nillum 2\n\n\
+               newmtl IorOne\nNs 250.0\nKd 0.8 0.8 0.8\nKs 0.5 0.5 0.5\nNi 1.000000\nillum 2\n\n\
+               newmtl IorZero\nNs 250.0\nKd 0.8 0.8 0.8\nKs 0.5 0.5 0.5\nNi 0.000000\nillum 2\n\n\
+               newmtl NoIor\nNs 250.0\nKd 0.8 0.8 0.8\nKs 0.5 0.5 0.5\nillum 2\n\n\
+               newmtl Smooth\nKd 0.8 0.8 0.8\nKs 0.5 0.5 0.5\nNi 1.5\nPr 0.0\nillum 2\n\n\
+               newmtl Metal\nKd 0.9 0.6 0.0\nKs 0.5 0.5 0.5\nNi 1.5\nPr 0.2\nPm 1.0\nillum 3\n\n\
+               newmtl Lamp\nKd 0.8 0.8 0.8\nKs 0 0 0\nKe 5 5 5\nillum 2\n";
+    let mut obj = String::from("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\n");
+    for m in [
+        "BackLight",
+        "IorOne",
+        "IorZero",
+        "NoIor",
+        "Smooth",
+        "Metal",
+        "Lamp",
+    ] {
+        obj.push_str(&format!("usemtl {m}\nf 1 2 3\n"));
+    }
+    let d = load_with_mtl(&obj, mtl).unwrap();
+    let s = scene::Scene::build(d, 0.0).unwrap_or_else(|e| panic!("refused: {e}"));
+    for (i, what) in ["Ks 0", "Ni 1", "Ni 0"].iter().enumerate() {
+        match s.material_of(i as u32).bsdf {
+            Bsdf::Diffuse(l) => assert_eq!(l.kd, [0.8; 3], "{what}"),
+            b => panic!("{what}: {b:?}"),
+        }
+    }
+    // no Ni: Blender 4 keeps IOR 1.5, level 0.5 -> F0 0.04, eta 1.5
+    match s.material_of(3).bsdf {
+        Bsdf::Plastic(p) => assert!((p.coat.eta - 1.5).abs() < 1e-4, "{}", p.coat.eta),
+        b => panic!("no Ni: {b:?}"),
+    }
+    match s.material_of(4).bsdf {
+        Bsdf::Plastic(p) => assert!(p.coat.alpha == 0.0 && (p.coat.eta - 1.5).abs() < 1e-4),
+        b => panic!("Pr 0: {b:?}"),
+    }
+    match s.material_of(5).bsdf {
+        Bsdf::Conductor(c) => assert!((c.alpha - 0.04).abs() < 1e-6, "{}", c.alpha),
+        b => panic!("Pm 1: {b:?}"),
+    }
+    assert!(s.material_of(6).is_emissive());
+}

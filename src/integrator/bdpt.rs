@@ -593,7 +593,7 @@ fn visible(
         None => b,
     };
     c.rays += 1;
-    !scene.bvh.occluded(&Ray::new(o, e - o), 1.0 - 1e-4)
+    !scene.occluded(&Ray::new(o, e - o), 1.0 - 1e-4)
 }
 
 /// The unweighted contribution of strategy (s, t) (pbrt's `ConnectBDPT` without the MIS

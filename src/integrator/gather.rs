@@ -197,7 +197,7 @@ pub fn radiance<const N: usize>(
             if let Some((r, t_max, e)) = super::path::next_event::<N>(
                 scene, hit.p, ng, &frame, wo_l, &bsdf, &sel, u_sel, u_light, &beta, c,
             ) {
-                if !scene.bvh.occluded(&r, t_max) {
+                if !scene.occluded(&r, t_max) {
                     l += e;
                 }
             }

@@ -47,7 +47,7 @@ pub fn radiance<const N: usize>(
         let occluded = p
             .shadow
             .as_ref()
-            .is_some_and(|(r, t_max, _)| scene.bvh.occluded(r, *t_max));
+            .is_some_and(|(r, t_max, _)| scene.occluded(r, *t_max));
         p.resolve(occluded);
     }
     p.l
@@ -100,7 +100,7 @@ pub fn radiance_batch<const N: usize>(
         if k == 0 {
             break;
         }
-        scene.bvh.trace(&qs[..k], &mut ans[..k]);
+        scene.trace(&qs[..k], &mut ans[..k]);
         timer.lap(Phase::Trace);
         // The hits' triangle data is asked for before the paths read it, where the scene
         // is too large for the caches (as the BVH, `Bvh::interleaves`). On smaller scenes

@@ -406,6 +406,8 @@ mod tests {
             emission_table: None,
             kd_texture: None,
             one_sided: false,
+            opacity: 1.0,
+            opacity_texture: None,
         }
     }
 

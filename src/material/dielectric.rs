@@ -10,6 +10,23 @@ use glam::Vec3;
 pub struct Dielectric {
     /// Index of refraction inside relative to outside.
     pub eta: f32,
+    pub tint: Tint,
+}
+
+/// Factors on a dielectric's reflected and transmitted light (Mitsuba's
+/// `specular_reflectance` and `specular_transmittance`; 1 is physical). They scale the
+/// lobes' values, not how the lobes are sampled, as in Mitsuba.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tint {
+    pub reflect: [f32; 3],
+    pub transmit: [f32; 3],
+}
+
+impl Tint {
+    pub const NONE: Tint = Tint {
+        reflect: [1.0; 3],
+        transmit: [1.0; 3],
+    };
 }
 
 /// Unpolarised Fresnel reflectance; `cos_i` > 0 on the side of the normal, `eta` = inside/outside.
@@ -45,7 +62,7 @@ impl Dielectric {
         if u < f {
             return Some(BsdfSample {
                 wi: Vec3::new(-wo.x, -wo.y, wo.z),
-                weight: Spectrum::ONE,
+                weight: Spectrum::from_rgb(self.tint.reflect),
                 pdf: f,
                 delta: true,
             });
@@ -56,7 +73,7 @@ impl Dielectric {
         // Radiance scaling: L_o = L_i (eta_o/eta_i)^2, with eta_o/eta_i = eta_r.
         Some(BsdfSample {
             wi: wi.normalize(),
-            weight: Spectrum::splat(eta_r * eta_r),
+            weight: Spectrum::from_rgb(self.tint.transmit) * (eta_r * eta_r),
             pdf: 1.0 - f,
             delta: true,
         })

@@ -152,6 +152,7 @@ impl Bsdf {
             }),
             7 => Bsdf::Dielectric(Dielectric {
                 eta: if ni > 0.0 { ni } else { 1.5 },
+                tint: dielectric::Tint::NONE,
             }),
             _ => {
                 let d = kd != [0.0; 3];

@@ -18,7 +18,7 @@
 //!   p_r = D_{wo'}(h_r) F / (4 |wo.h_r|),
 //!   p_t = D_{wo'}(h_t) (1 - F) eta_i^2 |wi.h_t| / (eta_i wi.h_t + eta_o wo.h_t)^2.
 
-use super::dielectric::fresnel_dielectric;
+use super::dielectric::{fresnel_dielectric, Tint};
 use super::microfacet::{reflect, Distribution, Microfacet};
 use super::BsdfSample;
 use crate::spectrum::Spectrum;
@@ -30,6 +30,7 @@ pub struct RoughDielectric {
     pub eta: f32,
     pub alpha: f32,
     pub dist: Distribution,
+    pub tint: Tint,
 }
 
 /// Which half vector and what the densities need, for one pair of directions.
@@ -91,14 +92,16 @@ impl RoughDielectric {
             return Spectrum::ZERO;
         }
         let f = fresnel_dielectric(wo.dot(c.h), self.eta).0;
-        let v = if c.reflect {
-            f * dg / (4.0 * (wo.z * wi.z).abs())
+        if c.reflect {
+            let v = f * dg / (4.0 * (wo.z * wi.z).abs());
+            Spectrum::from_rgb(self.tint.reflect) * v
         } else {
             // eta_o = 1 and eta_i = eta_io in units of eta_o
             let den = c.eta_io * wi.dot(c.h) + wo.dot(c.h);
-            (wi.dot(c.h) * wo.dot(c.h)).abs() * (1.0 - f) * dg / ((wi.z * wo.z).abs() * den * den)
-        };
-        Spectrum::splat(v)
+            let v = (wi.dot(c.h) * wo.dot(c.h)).abs() * (1.0 - f) * dg
+                / ((wi.z * wo.z).abs() * den * den);
+            Spectrum::from_rgb(self.tint.transmit) * v
+        }
     }
 
     #[inline]

@@ -17,9 +17,18 @@ pub struct Material {
     pub kd_texture: Option<u32>,
     /// Black on the back side (the geometric normal's): see `MaterialDesc::one_sided`.
     pub one_sided: bool,
+    /// The share of light the surface stops, in [0, 1] (times `opacity_texture`'s value);
+    /// the rest passes through it unchanged (a cut-out).
+    pub opacity: f32,
+    pub opacity_texture: Option<u32>,
 }
 
 impl Material {
+    /// Light passes through it somewhere (opacity below 1, or a map of it).
+    pub fn is_cutout(&self) -> bool {
+        self.opacity < 1.0 || self.opacity_texture.is_some()
+    }
+
     pub fn is_emissive(&self) -> bool {
         self.emission.iter().any(|&e| e > 0.0)
     }

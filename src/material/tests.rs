@@ -224,7 +224,10 @@ fn bsdf_sampling_agrees_with_uniform_sampling() {
 
 #[test]
 fn dielectric_fresnel_and_snell() {
-    let d = Dielectric { eta: 1.5 };
+    let d = Dielectric {
+        eta: 1.5,
+        tint: super::dielectric::Tint::NONE,
+    };
     let f0 = d.reflectance(Vec3::Z);
     assert!((f0 - 0.04).abs() < 1e-4, "F(0) = {f0}");
     // total internal reflection from inside beyond the critical angle
@@ -308,7 +311,12 @@ fn rough_plastic(kd: f32, alpha: f32, nonlinear: bool) -> Bsdf {
 }
 
 fn rough_glass(dist: Distribution, eta: f32, alpha: f32) -> Bsdf {
-    Bsdf::RoughDielectric(RoughDielectric { eta, alpha, dist })
+    Bsdf::RoughDielectric(RoughDielectric {
+        eta,
+        alpha,
+        dist,
+        tint: super::dielectric::Tint::NONE,
+    })
 }
 
 /// The non-delta microfacet BSDFs (reflection only unless named "glass").
@@ -530,12 +538,18 @@ fn microfacet_white_furnace() {
         ("gold a=0.3", gold(0.3), None),
         (
             "smooth dielectric",
-            Bsdf::Dielectric(Dielectric { eta: 1.5 }),
+            Bsdf::Dielectric(Dielectric {
+                eta: 1.5,
+                tint: super::dielectric::Tint::NONE,
+            }),
             Some(1.0),
         ),
         (
             "thin dielectric",
-            Bsdf::ThinDielectric(ThinDielectric { eta: 1.5 }),
+            Bsdf::ThinDielectric(ThinDielectric {
+                eta: 1.5,
+                tint: super::dielectric::Tint::NONE,
+            }),
             Some(1.0),
         ),
         (

@@ -7,7 +7,7 @@
 //! it is sampled with these probabilities and weight 1. No radiance scaling: the ray ends
 //! in the medium it started in.
 
-use super::dielectric::fresnel_dielectric;
+use super::dielectric::{fresnel_dielectric, Tint};
 use super::BsdfSample;
 use crate::spectrum::Spectrum;
 use glam::Vec3;
@@ -15,6 +15,7 @@ use glam::Vec3;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ThinDielectric {
     pub eta: f32,
+    pub tint: Tint,
 }
 
 impl ThinDielectric {
@@ -35,14 +36,14 @@ impl ThinDielectric {
             return None;
         }
         let r = self.reflectance(wo.z);
-        let (wi, pdf) = if u < r {
-            (Vec3::new(-wo.x, -wo.y, wo.z), r)
+        let (wi, pdf, tint) = if u < r {
+            (Vec3::new(-wo.x, -wo.y, wo.z), r, self.tint.reflect)
         } else {
-            (-wo, 1.0 - r)
+            (-wo, 1.0 - r, self.tint.transmit)
         };
         Some(BsdfSample {
             wi,
-            weight: Spectrum::ONE,
+            weight: Spectrum::from_rgb(tint),
             pdf,
             delta: true,
         })

@@ -1,9 +1,32 @@
 //! The hit record: a ray's closest hit with everything shading needs (position, geometric
 //! and shading normals, texture coordinates, barycentrics), from `Scene::intersect`.
+//!
+//! Cut-outs (materials of opacity below 1, `Material::is_cutout`): a ray passes through
+//! such a surface with probability 1 - opacity, decided by a hash of the ray and the
+//! triangle (as pbrt-v4's alpha test), for closest hits and shadow rays alike, so that
+//! every estimator sees the surface as a stochastic cut-out, unbiased on average over its
+//! rays. Scenes without cut-outs take the BVH's answers unchanged.
 
 use super::Scene;
-use crate::accel::{prefetch_line, Hit};
-use crate::math::{Ray, Vec2, Vec3};
+use crate::accel::{prefetch_line, Hit, RayAnswer, RayQuery};
+use crate::math::{offset_origin, Ray, Vec2, Vec3};
+
+/// Cut-out surfaces a ray crosses at most; beyond, it is taken to pass (a bound on the
+/// work of a pathological stack of layers).
+const MAX_CROSSINGS: usize = 1024;
+
+/// A uniform number in [0, 1) from a ray and a triangle (its bits hashed).
+#[inline]
+fn cutout_u(ray: &Ray, prim: u32) -> f32 {
+    let mut h: u64 = 0x9E37_79B9_7F4A_7C15 ^ prim as u64;
+    for v in [ray.o.x, ray.o.y, ray.o.z, ray.d.x, ray.d.y, ray.d.z] {
+        h = (h ^ v.to_bits() as u64).wrapping_mul(0xff51_afd7_ed55_8ccd);
+        h ^= h >> 33;
+    }
+    h = h.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+    h ^= h >> 33;
+    (h >> 40) as f32 / (1u64 << 24) as f32
+}
 
 /// A ray's hit with everything shading needs.
 #[derive(Clone, Copy, Debug)]
@@ -25,7 +48,72 @@ impl Scene {
     /// The closest hit along `ray` before `t_max`, with the surface information.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
-        Some(self.surface_hit(self.bvh.intersect(ray, t_max)?))
+        let h = if self.cutouts {
+            self.intersect_cutouts(ray, t_max)
+        } else {
+            self.bvh.intersect(ray, t_max)
+        };
+        Some(self.surface_hit(h?))
+    }
+
+    /// Whether a surface stops light along `ray` before `t_max` (shadow rays).
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        if self.cutouts {
+            self.intersect_cutouts(ray, t_max).is_some()
+        } else {
+            self.bvh.occluded(ray, t_max)
+        }
+    }
+
+    /// Answers a batch of queries as `Bvh::trace`, cut-outs included.
+    pub fn trace(&self, queries: &[RayQuery], answers: &mut [RayAnswer]) {
+        if !self.cutouts {
+            return self.bvh.trace(queries, answers);
+        }
+        for (q, a) in queries.iter().zip(answers.iter_mut()) {
+            *a = match *q {
+                RayQuery::Closest(r, t) => RayAnswer::Closest(self.intersect_cutouts(&r, t)),
+                RayQuery::Occluded(r, t) => RayAnswer::Occluded(self.occluded(&r, t)),
+            };
+        }
+    }
+
+    /// Whether `ray` passes through the surface of hit `h` (its material's opacity).
+    #[inline]
+    fn passes(&self, ray: &Ray, h: &Hit) -> bool {
+        let m = self.material_of(h.prim);
+        if !m.is_cutout() {
+            return false;
+        }
+        let mut alpha = m.opacity;
+        if let Some(t) = m.opacity_texture {
+            let uv = self.surface_hit(*h).uv;
+            alpha *= self.textures[t as usize].lookup(uv.x, uv.y)[0];
+        }
+        cutout_u(ray, h.prim) >= alpha
+    }
+
+    /// The closest hit along `ray` before `t_max` that does not let the ray through.
+    fn intersect_cutouts(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let mut r = *ray;
+        let mut t_base = 0.0;
+        for _ in 0..MAX_CROSSINGS {
+            let mut h = self.bvh.intersect(&r, t_max - t_base)?;
+            h.t += t_base;
+            if !self.passes(ray, &h) {
+                return Some(h);
+            }
+            // on through the surface: from just behind it, along the same direction
+            let o = offset_origin(h.p, h.n.normalize_or_zero(), ray.d);
+            t_base = (o - ray.o).dot(ray.d) / ray.d.length_squared();
+            // (a NaN from a zero direction ends the ray too)
+            if t_base >= t_max || t_base.is_nan() {
+                return None;
+            }
+            r = Ray::new(o, ray.d);
+        }
+        None
     }
 
     /// Starts loading what [`Scene::surface_hit`] and [`Scene::material_of`] read of

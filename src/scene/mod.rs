@@ -19,6 +19,7 @@ pub use texture::Texture;
 
 use crate::accel::Bvh;
 use crate::light::Lights;
+use crate::material::dielectric::Tint;
 use crate::material::{AlbedoTable, Bsdf, Distribution, Material};
 use crate::math::{Bounds3, Vec2, Vec3};
 use std::path::{Path, PathBuf};
@@ -36,6 +37,13 @@ pub struct MaterialDesc {
     pub ke: [f32; 3],
     pub illum: u8,
     pub map_kd: Option<PathBuf>,
+    /// How `map_kd` is looked up (Mitsuba's bitmap `filter_type`, `wrap_mode`, `to_uv`).
+    pub kd_sampling: texture::Sampling,
+    /// The share of light the surface stops (Mitsuba's `mask`, MTL's `d`); the rest
+    /// passes straight through, as if the surface were not there (a cut-out).
+    pub opacity: f32,
+    /// A map of opacity (times `opacity`): its file, lookup and channel.
+    pub map_opacity: Option<(PathBuf, texture::Sampling, texture::OpacityFrom)>,
     /// Emit L_e(w) = 1 - a(w) instead of `ke`, a the directional albedo of the material's
     /// BSDF (tabulated when the scene is built): the radiance of a closed room of such
     /// surfaces is exactly 1 (`furnace-glossy`). No file format sets it.
@@ -78,14 +86,15 @@ pub enum SurfaceModel {
         nonlinear: bool,
     },
     /// `dielectric` / `roughdielectric`: an interface of relative index `eta` (inside over
-    /// outside).
+    /// outside), its reflection and transmission scaled by `tint`.
     Dielectric {
         eta: f32,
         alpha: f32,
         distribution: Distribution,
+        tint: Tint,
     },
     /// `thindielectric`: a thin slab of index `eta` (no refraction of the direction).
-    ThinDielectric { eta: f32 },
+    ThinDielectric { eta: f32, tint: Tint },
 }
 
 impl SurfaceModel {
@@ -146,6 +155,9 @@ impl MaterialDesc {
             ke: [0.0; 3],
             illum: 2,
             map_kd: None,
+            kd_sampling: texture::Sampling::default(),
+            opacity: 1.0,
+            map_opacity: None,
             emit_one_minus_albedo: false,
             source: None,
             notes: Vec::new(),
@@ -272,31 +284,43 @@ pub struct Scene {
     /// A hash of the contents of the files the scene was read from ([`load`]; 0 when
     /// built from a description): film parts of one render share it.
     pub content_hash: u64,
+    /// Some material lets light through where it is not opaque (see `hit.rs`).
+    pub cutouts: bool,
 }
 
 impl Scene {
     /// Build textures, materials, lights and the BVH from a description.
     pub fn build(desc: SceneDesc, load_seconds: f64) -> Result<Scene, String> {
         let mut textures: Vec<Texture> = Vec::new();
-        let mut tex_paths: Vec<PathBuf> = Vec::new();
+        let mut tex_paths: Vec<TexKey> = Vec::new();
         let mut materials = Vec::with_capacity(desc.materials.len());
         let mut material_warnings: Vec<String> = Vec::new();
         for m in &desc.materials {
             let kd_texture = match &m.map_kd {
-                Some(p) => Some(match tex_paths.iter().position(|q| q == p) {
-                    Some(i) => i as u32,
-                    None => {
-                        // (the error names the material that asks for the texture)
-                        textures.push(
-                            Texture::load(p)
-                                .map_err(|e| format!("{}: texture {e}", m.described()))?,
-                        );
-                        tex_paths.push(p.clone());
-                        textures.len() as u32 - 1
-                    }
-                }),
+                Some(p) => Some(texture_index(
+                    (p.clone(), m.kd_sampling, None),
+                    m,
+                    &mut textures,
+                    &mut tex_paths,
+                )?),
                 None => None,
             };
+            let opacity_texture = match &m.map_opacity {
+                Some((p, s, from)) => Some(texture_index(
+                    (p.clone(), *s, Some(*from)),
+                    m,
+                    &mut textures,
+                    &mut tex_paths,
+                )?),
+                None => None,
+            };
+            if !(m.opacity.is_finite() && m.opacity >= 0.0) {
+                return Err(format!(
+                    "{}: opacity {}: must be a number in [0, 1]",
+                    m.described(),
+                    m.opacity
+                ));
+            }
             let (kd, ks, kd_texture, w) = if m.model.is_some() {
                 // a surface model reads kd alone (plastic's base): Ks and illum are not its
                 let mut only_kd = m.clone();
@@ -327,8 +351,11 @@ impl Scene {
                 emission_table,
                 kd_texture,
                 one_sided: m.one_sided && bsdf.is_two_sided(),
+                opacity: m.opacity.min(1.0),
+                opacity_texture,
             });
         }
+        let cutouts = materials.iter().any(Material::is_cutout);
         let t0 = Instant::now();
         let bvh = Bvh::build(&desc.positions);
         let bvh_seconds = t0.elapsed().as_secs_f64();
@@ -469,6 +496,7 @@ impl Scene {
             warnings,
             camera_warning,
             content_hash: 0,
+            cutouts,
         })
     }
 
@@ -565,6 +593,7 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             eta,
             alpha,
             distribution,
+            tint,
         } => {
             if !eta_ok(eta) {
                 return Err(format!(
@@ -574,21 +603,34 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             if !alpha_ok(alpha) {
                 return Err(format!("alpha {alpha}: must be in [0, 4]"));
             }
+            if !(finite(&tint.reflect) && finite(&tint.transmit)) {
+                return Err(
+                    "specular_reflectance and specular_transmittance must be finite and non-negative"
+                        .into(),
+                );
+            }
             if alpha > 0.0 {
                 Bsdf::RoughDielectric(RoughDielectric {
                     eta,
                     alpha,
                     dist: distribution,
+                    tint,
                 })
             } else {
-                Bsdf::Dielectric(Dielectric { eta })
+                Bsdf::Dielectric(Dielectric { eta, tint })
             }
         }
-        SurfaceModel::ThinDielectric { eta } => {
+        SurfaceModel::ThinDielectric { eta, tint } => {
             if !(eta.is_finite() && eta > 0.0) {
                 return Err(format!("eta {eta}: must be positive"));
             }
-            Bsdf::ThinDielectric(ThinDielectric { eta })
+            if !(finite(&tint.reflect) && finite(&tint.transmit)) {
+                return Err(
+                    "specular_reflectance and specular_transmittance must be finite and non-negative"
+                        .into(),
+                );
+            }
+            Bsdf::ThinDielectric(ThinDielectric { eta, tint })
         }
     })
 }
@@ -684,6 +726,32 @@ pub fn not_a_scene(spec: &str) -> String {
     )
 }
 
+/// What identifies a loaded texture: its file, its lookup, and for a scalar opacity map
+/// where its value comes from (a file used as colour and as opacity is two textures).
+type TexKey = (PathBuf, texture::Sampling, Option<texture::OpacityFrom>);
+
+/// The index of the texture `key` asks for, loaded the first time (errors name the
+/// material `m` that asks for it).
+fn texture_index(
+    key: TexKey,
+    m: &MaterialDesc,
+    textures: &mut Vec<Texture>,
+    keys: &mut Vec<TexKey>,
+) -> Result<u32, String> {
+    if let Some(i) = keys.iter().position(|k| *k == key) {
+        return Ok(i as u32);
+    }
+    let mut t = match key.2 {
+        None => Texture::load(&key.0),
+        Some(from) => Texture::load_opacity(&key.0, from),
+    }
+    .map_err(|e| format!("{}: texture {e}", m.described()))?;
+    t.sampling = key.1;
+    textures.push(t);
+    keys.push(key);
+    Ok(textures.len() as u32 - 1)
+}
+
 /// Kd + Ks of a material brought to at most 1 on every band ([`mtl::energy_scale`]; a
 /// textured Kd counts as its mean texel and is scaled by a scaled copy of the texture),
 /// and the material's one warning: its notes from loading plus the scaling, if any.
@@ -692,7 +760,7 @@ fn conserve_energy(
     m: &MaterialDesc,
     kd_texture: Option<u32>,
     textures: &mut Vec<Texture>,
-    tex_paths: &mut Vec<PathBuf>,
+    tex_paths: &mut Vec<TexKey>,
 ) -> ([f32; 3], [f32; 3], Option<u32>, Option<String>) {
     let mut notes = m.notes.clone();
     let (mut kd, mut ks, mut tex) = (m.kd, m.ks, kd_texture);
@@ -715,7 +783,8 @@ fn conserve_energy(
                 *texel = texel.map(|v| v * s);
             }
             textures.push(scaled);
-            tex_paths.push(PathBuf::new()); // never matches a map_Kd path: not shared
+            // never matches a map_Kd path: not shared
+            tex_paths.push((PathBuf::new(), texture::Sampling::default(), None));
             tex = Some(textures.len() as u32 - 1);
         }
     }

@@ -4,7 +4,8 @@
 //! `-bm`, `-clamp on`, ...) first, then a file name that may contain spaces. Values kalos
 //! renders differently from what the file asks (`illum 99`, glass with `Ni 0`, a
 //! duplicate `newmtl`) become notes on the material, one warning per material; Kd + Ks
-//! above 1 is scaled when the scene is built ([`energy_scale`]).
+//! above 1 is scaled when the scene is built ([`energy_scale`]). Dissolve (`d`, `Tr`) and
+//! `map_d` are the surface's opacity, a cut-out as Blender renders them (glass excepted).
 //!
 //! Files written by Blender (a first line `# Blender ... MTL File`) and materials with
 //! the PBR extension's `Pr`/`Pm` are not Phong materials: Blender writes its Principled
@@ -153,6 +154,8 @@ struct Pbr {
     ka: Option<[f32; 3]>,
     pr: Option<f32>,
     pm: Option<f32>,
+    /// The material has an `Ni` statement (Blender 4's importer keeps IOR 1.5 without).
+    ni_given: bool,
 }
 
 /// Blender's Principled BSDF from what its exporter wrote, as a kalos surface model:
@@ -161,13 +164,15 @@ struct Pbr {
 /// a coat whose normal-incidence reflectance is F0 = 0.08 s (Blender 2.8-3.x, s = `Ks`)
 /// or F0(`Ni`) 2 s (Blender 4's "IOR level"), of index eta = (1 + sqrt F0)/(1 - sqrt F0);
 /// a metal (m >= 0.5) a conductor whose F0 is the base colour. `illum 1` (Blender's
-/// specular 0) and glass or mirror models stay as MTL reads them. Returns the model and
-/// a note when the material is only approximated.
+/// specular 0) and glass or mirror models stay as MTL reads them. A dielectric whose
+/// coat reflects nothing (`Ks 0`; Blender 4's `Ni 1` or `Ni 0`, an IOR Blender clamps
+/// to 1) is the diffuse base alone, as Blender renders it: the model is None then.
+/// Returns the model and a note when the material is only approximated.
 fn principled(
     m: &MaterialDesc,
     pbr: &Pbr,
     writer: Writer,
-) -> Option<(super::SurfaceModel, Option<String>)> {
+) -> Option<(Option<super::SurfaceModel>, Option<String>)> {
     use super::SurfaceModel;
     use crate::material::Distribution;
     if !matches!(m.illum, 2 | 3) {
@@ -206,32 +211,38 @@ fn principled(
             note = Some("a metal's colour from map_Kd: rendered with Kd, untextured".into());
         }
         return Some((
-            SurfaceModel::Conductor {
+            Some(SurfaceModel::Conductor {
                 eta: m.kd.map(eta_of),
                 k: [0.0; 3],
                 specular: [1.0; 3],
                 alpha,
                 distribution: Distribution::Ggx,
-            },
+            }),
             note,
         ));
     }
     let level = (m.ks[0] + m.ks[1] + m.ks[2]) / 3.0;
+    let fresnel0 = |ior: f32| ((ior - 1.0) / (ior + 1.0)).powi(2);
     let f0 = match writer {
-        Writer::BlenderCpp(v) if v >= 4 && m.ni > 1.0 => {
-            ((m.ni - 1.0) / (m.ni + 1.0)).powi(2) * 2.0 * level
+        // Blender 4's IOR socket is at least 1; without Ni its importer keeps 1.5
+        Writer::BlenderCpp(v) if v >= 4 => {
+            let ior = if pbr.ni_given { m.ni.max(1.0) } else { 1.5 };
+            fresnel0(ior) * 2.0 * level
         }
-        Writer::Other if m.ni > 1.0 => ((m.ni - 1.0) / (m.ni + 1.0)).powi(2),
+        Writer::Other if m.ni > 1.0 => fresnel0(m.ni),
         _ => 0.08 * level,
     };
+    if f0 < 1e-6 {
+        return Some((None, note));
+    }
     Some((
-        SurfaceModel::Plastic {
+        Some(SurfaceModel::Plastic {
             eta: eta_of(f0),
             specular: [1.0; 3],
             alpha,
             distribution: Distribution::Ggx,
             nonlinear: false,
-        },
+        }),
         note,
     ))
 }
@@ -249,7 +260,6 @@ const NOT_RENDERED: &[(&str, &str)] = &[
     ("map_Kn", "normal map"),
     ("disp", "displacement map"),
     ("decal", "decal"),
-    ("map_d", "alpha (cut-out) map"),
     ("map_Ks", "specular map"),
     ("map_Ns", "roughness map"),
     ("map_Pr", "roughness map"),
@@ -274,8 +284,8 @@ pub fn parse_mtl(
     let mut lines: Vec<(usize, Option<usize>)> = Vec::new();
     // (statement, what it is, first line, occurrences) of what is not rendered
     let mut ignored: Vec<(&str, &str, usize, usize)> = Vec::new();
-    // (d or Tr, its line) of the current material when it asks for transparency
-    let mut dissolve: Vec<Option<(String, usize)>> = Vec::new();
+    // (d or Tr, its line, the opacity) of the current material when it is below 1
+    let mut dissolve: Vec<Option<(String, usize, f32)>> = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let line_no = i + 1;
         let line = raw.split('#').next().unwrap_or("").trim();
@@ -310,7 +320,8 @@ pub fn parse_mtl(
             continue;
         }
         let known = [
-            "Kd", "Ks", "Ke", "Ns", "Ni", "illum", "map_Kd", "Ka", "d", "Tr", "Tf", "Pr", "Pm",
+            "Kd", "Ks", "Ke", "Ns", "Ni", "illum", "map_Kd", "map_d", "Ka", "d", "Tr", "Tf", "Pr",
+            "Pm",
         ];
         if !known.contains(&key) {
             continue; // other statements (maps we do not use, PBR extensions) are ignored
@@ -337,6 +348,9 @@ pub fn parse_mtl(
             "Ns" => m.ns = v3(1)?[0],
             "Ni" => {
                 m.ni = v3(1)?[0];
+                if let Some(p) = pbr.last_mut() {
+                    p.ni_given = true;
+                }
                 if let Some(l) = lines.last_mut() {
                     l.1 = Some(line_no);
                 }
@@ -353,8 +367,9 @@ pub fn parse_mtl(
                     ));
                 }
             }
-            // Dissolve: d 1 (Tr 0) is opaque; anything else asks for a see-through
-            // surface, which kalos renders only as glass (illum 7).
+            // Dissolve: d 1 (Tr 0) is opaque; below, the surface's opacity (a cut-out
+            // that lets the rest of the light through, as Blender reads it), except on
+            // glass (illum 7), which is see-through of its own.
             "d" | "Tr" => {
                 // `d -halo f` (the MTL spec's orientation-dependent dissolve) is a dissolve too
                 let words = match rest.split_first() {
@@ -362,10 +377,19 @@ pub fn parse_mtl(
                     _ => rest,
                 };
                 let v = parse_vals(file, line_no, key, words, 1)?[0];
-                let opaque = if key == "d" { v >= 1.0 } else { v <= 0.0 };
+                let opacity = if key == "d" { v } else { 1.0 - v }.clamp(0.0, 1.0);
                 if let Some(d) = dissolve.last_mut() {
-                    *d = (!opaque).then(|| (format!("{key} {v}"), line_no));
+                    *d = (opacity < 1.0).then(|| (format!("{key} {v}"), line_no, opacity));
                 }
+            }
+            "map_d" => {
+                let args = line[key.len()..].trim();
+                let name = map_file_name(args, file, line_no, key)?;
+                m.map_opacity = Some((
+                    normalise_path(dir, name),
+                    super::texture::Sampling::default(),
+                    super::texture::OpacityFrom::AlphaOrGrey,
+                ));
             }
             "map_Kd" => {
                 let args = line[key.len()..].trim();
@@ -376,11 +400,16 @@ pub fn parse_mtl(
         }
     }
     for (m, d) in mats.iter_mut().zip(&dissolve) {
-        if let (Some((what, at)), false) = (d, m.illum == 7) {
-            m.notes.push(format!(
-                "{what} (line {at}) asks for a partly transparent surface, which kalos does not render: opaque (illum 7 makes it glass)"
-            ));
-        } else if matches!(m.illum, 4 | 6 | 9) {
+        if m.illum == 7 {
+            m.map_opacity = None; // glass is see-through by refraction
+        } else if let Some((what, at, opacity)) = d {
+            m.opacity = *opacity;
+            if *opacity == 0.0 && m.map_opacity.is_none() {
+                m.notes.push(format!(
+                    "{what} (line {at}): fully transparent, the surface is invisible (as Blender renders it)"
+                ));
+            }
+        } else if matches!(m.illum, 4 | 6 | 9) && m.map_opacity.is_none() {
             m.notes.push(format!(
                 "illum {} (transparency, ray-traced refraction) is not rendered: opaque diffuse + glossy from Kd and Ks (illum 7 makes it glass)",
                 m.illum
@@ -403,7 +432,10 @@ pub fn parse_mtl(
             continue;
         }
         if let Some((model, note)) = principled(m, p, writer) {
-            m.model = Some(model);
+            if model.is_none() {
+                m.ks = [0.0; 3]; // no coat: the base alone, not MTL's Phong lobe
+            }
+            m.model = model;
             m.notes.extend(note);
             read_as_pbr += 1;
         }
@@ -561,38 +593,49 @@ mod tests {
         assert!(note[0].contains("PBR extension"));
     }
 
-    /// Maps and transparency kalos does not render are said, never dropped in silence:
-    /// one note for the file's maps, one per material for its transparency.
+    /// Maps kalos does not render are said, never dropped in silence (one note for the
+    /// file); dissolve and map_d are the surface's opacity (a cut-out), `d 0` said.
     #[test]
     fn what_is_not_rendered_is_said() {
+        use crate::scene::texture::OpacityFrom;
         let text = "newmtl a\nKd 0.5 0.5 0.5\nmap_Bump -bm 0.3 a n.png\nmap_d leaf.png\nd 0.25\n\
                     newmtl b\nKd 0.5 0.5 0.5\nbump b.png\nmap_Bump c.png\nTr 0\nd 1\n\
                     newmtl c\nKs 1 1 1\nNi 1.5\nd 0.1\nillum 7\n\
                     newmtl w\nKd 0.2 0.2 0.2\nillum 4\nmap_Ka amb.png\n\
-                    newmtl h\nKd 0.5 0.5 0.5\nd -halo 0.6\n";
-        let (m, notes) = parse_mtl(text, "x.mtl", Path::new(".")).unwrap();
+                    newmtl h\nKd 0.5 0.5 0.5\nd -halo 0.6\n\
+                    newmtl z\nKd 0.5 0.5 0.5\nd 0.000000\nillum 9\n";
+        let (m, notes) = parse_mtl(text, "x.mtl", Path::new("/d")).unwrap();
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert_eq!(
             notes[0],
             "x.mtl: not rendered, so these surfaces will look different: map_Bump (bump map, \
-             line 3, 2 times), map_d (alpha (cut-out) map, line 4), bump (bump map, line 8)"
+             line 3, 2 times), bump (bump map, line 8)"
         );
-        assert!(
-            m[0].notes[0].starts_with("d 0.25 (line 5) asks for a partly transparent"),
-            "{:?}",
-            m[0].notes
+        assert_eq!(m[0].opacity, 0.25);
+        assert_eq!(
+            m[0].map_opacity,
+            Some((
+                PathBuf::from("/d/leaf.png"),
+                Default::default(),
+                OpacityFrom::AlphaOrGrey
+            ))
         );
+        assert!(m[0].notes.is_empty(), "{:?}", m[0].notes);
+        assert_eq!(m[1].opacity, 1.0, "Tr 0 then d 1");
         assert!(m[1].notes.is_empty(), "opaque d 1 / Tr 0: {:?}", m[1].notes);
         assert!(m[2].notes.is_empty(), "glass: {:?}", m[2].notes);
+        assert_eq!(m[2].opacity, 1.0, "glass is see-through by refraction");
         assert!(
             m[3].notes[0].starts_with("illum 4 (transparency"),
             "{:?}",
             m[3].notes
         );
+        assert_eq!(m[4].opacity, 0.6, "d -halo");
+        assert_eq!(m[5].opacity, 0.0);
         assert!(
-            m[4].notes[0].starts_with("d 0.6 (line 23)"),
+            m[5].notes[0].starts_with("d 0 (line 26): fully transparent"),
             "{:?}",
-            m[4].notes
+            m[5].notes
         );
     }
 }

@@ -1,13 +1,56 @@
-//! Image textures (map_Kd): PNG/JPEG/TGA/BMP decoded from sRGB to linear, EXR/PFM as stored (linear), bilinear lookup with
-//! wrap-around, OBJ's v axis pointing up.
+//! Image textures (map_Kd, opacity): PNG/JPEG/TGA/BMP decoded from sRGB to linear,
+//! EXR/PFM as stored (linear), OBJ's v axis pointing up; looked up as Mitsuba's `bitmap`
+//! does ([`Sampling`]: bilinear or nearest, repeat, mirror or clamp, a `to_uv` transform).
 
 use std::path::Path;
+
+/// What a lookup does outside [0, 1) (Mitsuba's `wrap_mode`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Wrap {
+    #[default]
+    Repeat,
+    Mirror,
+    Clamp,
+}
+
+/// How a texture is looked up (Mitsuba's `filter_type`, `wrap_mode` and `to_uv`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sampling {
+    /// The nearest texel instead of the bilinear blend of four.
+    pub nearest: bool,
+    pub wrap: Wrap,
+    /// Affine map of Mitsuba's uv (v pointing down the image): u' = a u + b v + c,
+    /// v' = d u + e v + f, as [a, b, c, d, e, f].
+    pub to_uv: [f32; 6],
+}
+
+impl Default for Sampling {
+    fn default() -> Self {
+        Sampling {
+            nearest: false,
+            wrap: Wrap::Repeat,
+            to_uv: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+        }
+    }
+}
+
+/// Where a scalar opacity map takes its value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum OpacityFrom {
+    /// The luminance of the linear (sRGB-decoded) colour, as Mitsuba's `bitmap` as a float
+    /// texture (a grey image's grey).
+    Luminance,
+    /// MTL's `map_d`: the image's alpha where it has one that is not all opaque, else the
+    /// stored grey (Blender's importer reads it as non-colour data).
+    AlphaOrGrey,
+}
 
 #[derive(Clone, Debug)]
 pub struct Texture {
     pub width: u32,
     pub height: u32,
     pub texels: Vec<[f32; 3]>,
+    pub sampling: Sampling,
 }
 
 impl Texture {
@@ -24,6 +67,7 @@ impl Texture {
                 width: img.width,
                 height: img.height,
                 texels: img.data,
+                sampling: Sampling::default(),
             });
         }
         // through `input`: only regular files, within the input limit
@@ -46,14 +90,59 @@ impl Texture {
             width,
             height,
             texels,
+            sampling: Sampling::default(),
         })
+    }
+
+    /// A scalar map (every texel's three values equal) for opacity.
+    pub fn load_opacity(path: &Path, from: OpacityFrom) -> Result<Texture, String> {
+        let mut t = Texture::load(path)?;
+        if from == OpacityFrom::AlphaOrGrey {
+            let ext = path
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(|e| e.to_ascii_lowercase());
+            if !matches!(ext.as_deref(), Some("exr") | Some("pfm")) {
+                let bytes = crate::input::read_bytes(path)?;
+                let img = crate::image_io::decode_8bit(&bytes, ext.as_deref())
+                    .map_err(|e| format!("{}: cannot read texture: {e}", path.display()))?
+                    .to_rgba8();
+                let alpha = img.pixels().any(|p| p[3] < 255);
+                for (t, p) in t.texels.iter_mut().zip(img.pixels()) {
+                    let v = if alpha {
+                        p[3] as f32
+                    } else {
+                        (p[0] as f32 + p[1] as f32 + p[2] as f32) / 3.0
+                    };
+                    *t = [v / 255.0; 3];
+                }
+                return Ok(t);
+            }
+        }
+        for t in &mut t.texels {
+            *t = [0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]; 3];
+        }
+        Ok(t)
     }
 
     #[inline]
     fn texel(&self, x: i64, y: i64) -> [f32; 3] {
-        let xi = x.rem_euclid(self.width as i64) as usize;
-        let yi = y.rem_euclid(self.height as i64) as usize;
-        self.texels[yi * self.width as usize + xi]
+        let wrap = |i: i64, n: u32| -> usize {
+            let n = n as i64;
+            (match self.sampling.wrap {
+                Wrap::Repeat => i.rem_euclid(n),
+                Wrap::Clamp => i.clamp(0, n - 1),
+                Wrap::Mirror => {
+                    let m = i.rem_euclid(2 * n);
+                    if m >= n {
+                        2 * n - 1 - m
+                    } else {
+                        m
+                    }
+                }
+            }) as usize
+        };
+        self.texels[wrap(y, self.height) * self.width as usize + wrap(x, self.width)]
     }
 
     /// Mean texel (linear RGB).
@@ -68,14 +157,23 @@ impl Texture {
         [(s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32]
     }
 
-    /// Bilinear lookup at (u, v), v = 0 at the bottom of the image.
+    /// Lookup at (u, v), v = 0 at the bottom of the image, as [`Sampling`] says.
     #[inline]
     pub fn lookup(&self, u: f32, v: f32) -> [f32; 3] {
         if !(u.is_finite() && v.is_finite()) {
             return self.texel(0, 0);
         }
+        // Mitsuba's uv runs down the image: its to_uv applies to (u, 1 - v)
+        let [a, b, c, d, e, f] = self.sampling.to_uv;
+        let (u, w) = (u, 1.0 - v);
+        let (u, w) = (a * u + b * w + c, d * u + e * w + f);
+        if self.sampling.nearest {
+            let x = (u * self.width as f32).floor();
+            let y = (w * self.height as f32).floor();
+            return self.texel(x as i64, y as i64);
+        }
         let x = u * self.width as f32 - 0.5;
-        let y = (1.0 - v) * self.height as f32 - 0.5;
+        let y = w * self.height as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (x0, y0) = (x0 as i64, y0 as i64);
@@ -118,5 +216,41 @@ mod tests {
             assert_eq!(t.texels[3], [1.0, mid, 1.0], "{ext}");
         }
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Nearest and bilinear lookups, the wrap modes and to_uv on a 2 x 1 texture of
+    /// texels 0 and 1 (known answers).
+    #[test]
+    fn sampling_follows_mitsubas_bitmap() {
+        let mut t = Texture {
+            width: 2,
+            height: 1,
+            texels: vec![[0.0; 3], [1.0; 3]],
+            sampling: Sampling::default(),
+        };
+        // u = 0.5 is between the texel centres 0.25 and 0.75: bilinear 0.5
+        assert_eq!(t.lookup(0.5, 0.5)[0], 0.5);
+        assert_eq!(t.lookup(0.375, 0.5)[0], 0.25);
+        // repeat: u = 0 is halfway between texel 1 (wrapped) and texel 0
+        assert_eq!(t.lookup(0.0, 0.5)[0], 0.5);
+        t.sampling.wrap = Wrap::Clamp;
+        assert_eq!(t.lookup(0.0, 0.5)[0], 0.0);
+        assert_eq!(t.lookup(1.2, 0.5)[0], 1.0);
+        t.sampling.wrap = Wrap::Mirror;
+        // texel -1 mirrors texel 0, texel 2 mirrors texel 1
+        assert_eq!(t.lookup(0.0, 0.5)[0], 0.0);
+        assert_eq!(t.lookup(1.1, 0.5)[0], 1.0);
+        t.sampling = Sampling {
+            nearest: true,
+            ..Sampling::default()
+        };
+        assert_eq!(t.lookup(0.49, 0.5)[0], 0.0);
+        assert_eq!(t.lookup(0.51, 0.5)[0], 1.0);
+        assert_eq!(t.lookup(1.51, 0.5)[0], 1.0, "repeats");
+        // to_uv: u' = 2 u - 0.5 puts u = 0.2 at u' = -0.1 (texel -1, repeated: texel 1)
+        assert_eq!(t.lookup(0.2, 0.5)[0], 0.0);
+        t.sampling.to_uv = [2.0, 0.0, -0.5, 0.0, 1.0, 0.0];
+        assert_eq!(t.lookup(0.2, 0.5)[0], 1.0);
+        assert_eq!(t.lookup(0.3, 0.5)[0], 0.0);
     }
 }

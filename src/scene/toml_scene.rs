@@ -43,6 +43,7 @@
 //! ```
 
 use super::{CameraDesc, RenderDefaults, SceneDesc};
+use crate::material::dielectric::Tint;
 use crate::material::Distribution;
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use serde::Deserialize;
@@ -178,6 +179,7 @@ impl ModelSection {
                 eta: eta.unwrap_or(1.5),
                 alpha: 0.0,
                 distribution: DEFAULT_DISTRIBUTION,
+                tint: Tint::NONE,
             },
             ModelSection::RoughDielectric {
                 eta,
@@ -187,9 +189,11 @@ impl ModelSection {
                 eta: eta.unwrap_or(1.5),
                 alpha: alpha.unwrap_or(DEFAULT_ALPHA),
                 distribution: distribution.unwrap_or(DEFAULT_DISTRIBUTION),
+                tint: Tint::NONE,
             },
             ModelSection::ThinDielectric { eta } => M::ThinDielectric {
                 eta: eta.unwrap_or(1.5),
+                tint: Tint::NONE,
             },
         }
     }

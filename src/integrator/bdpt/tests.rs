@@ -561,6 +561,7 @@ fn rough_glass_room() -> Scene {
         eta: 1.5,
         alpha: 0.3,
         distribution: crate::material::Distribution::Ggx,
+        tint: crate::material::dielectric::Tint::NONE,
     });
     let mut floor = MaterialDesc::named("floor");
     floor.kd = [0.7, 0.4, 0.2];

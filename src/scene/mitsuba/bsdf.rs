@@ -1,35 +1,9 @@
 //! Mitsuba's BSDF plugins as kalos materials (`MaterialDesc` with a `SurfaceModel`).
 
 use super::*;
-
-/// Unpolarised Fresnel reflectance of a conductor at normal incidence.
-pub(super) fn conductor_r0(eta: f32, k: f32) -> f32 {
-    ((eta - 1.0).powi(2) + k * k) / ((eta + 1.0).powi(2) + k * k)
-}
-
-/// Unpolarised Fresnel reflectance of a dielectric interface (relative index `eta`,
-/// light arriving from the outside at cosine `c`).
-pub(super) fn fresnel_dielectric(c: f32, eta: f32) -> f32 {
-    let s2 = (1.0 - c * c).max(0.0) / (eta * eta);
-    if s2 >= 1.0 {
-        return 1.0;
-    }
-    let ct = (1.0 - s2).sqrt();
-    let rs = (c - eta * ct) / (c + eta * ct);
-    let rp = (eta * c - ct) / (eta * c + ct);
-    0.5 * (rs * rs + rp * rp)
-}
-
-/// Hemispherical (cosine-weighted) Fresnel reflectance, from the side of index ratio eta.
-pub(super) fn fresnel_diffuse(eta: f32) -> f32 {
-    let n = 256;
-    (0..n)
-        .map(|i| {
-            let c = (i as f32 + 0.5) / n as f32;
-            2.0 * c * fresnel_dielectric(c, eta) / n as f32
-        })
-        .sum()
-}
+use crate::material::conductor::fresnel_conductor;
+use crate::material::dielectric::{fresnel_dielectric, Tint};
+use crate::scene::texture::OpacityFrom;
 
 /// A normalized-Phong exponent with about the spread of a GGX lobe of roughness alpha.
 pub(super) fn phong_exponent(alpha: f32) -> f32 {
@@ -125,9 +99,10 @@ impl<'a> Loader<'a> {
         match c {
             None => m.kd = [default; 3],
             Some(Color::Rgb(v)) => m.kd = v,
-            Some(Color::Bitmap(p)) => {
+            Some(Color::Bitmap(p, sampling)) => {
                 m.kd = [1.0; 3];
                 m.map_kd = Some(p);
+                m.kd_sampling = sampling;
             }
         }
     }
@@ -235,7 +210,8 @@ impl<'a> Loader<'a> {
                 let specular = self
                     .constant(el, "specular_reflectance", Use::Reflectance, kind)?
                     .unwrap_or([1.0; 3]);
-                let r0: [f32; 3] = [0, 1, 2].map(|i| conductor_r0(eta[i], k[i]) * specular[i]);
+                let r0: [f32; 3] =
+                    [0, 1, 2].map(|i| fresnel_conductor(1.0, eta[i], k[i]) * specular[i]);
                 m.kd = [0.0; 3];
                 m.ks = r0;
                 if alpha == 0.0 {
@@ -266,21 +242,9 @@ impl<'a> Loader<'a> {
                     .constant(el, "specular_reflectance", Use::Reflectance, kind)?
                     .unwrap_or([1.0; 3]);
                 let nonlinear = self.boolean(el, "nonlinear")?.unwrap_or(false);
-                // Mitsuba's diffuse term: R (1 - F_i)(1 - F_o) / (eta^2 (1 - {R or 1} Fdr_int))
-                let f0 = fresnel_dielectric(1.0, eta);
-                let fdr_int = fresnel_diffuse(1.0 / eta);
-                let t = (1.0 - f0) * (1.0 - f0) / (eta * eta);
-                let scale = |r: f32| {
-                    let d = 1.0 - if nonlinear { r } else { 1.0 } * fdr_int;
-                    if d > 0.0 {
-                        t / d
-                    } else {
-                        1.0
-                    }
-                };
-                if m.map_kd.is_none() {
-                    m.kd = m.kd.map(|r| r * scale(r));
-                }
+                // kd stays the diffuse reflectance: the Plastic model applies the coat's
+                // transmittance and internal reflections (Mitsuba's diffuse term)
+                let f0 = fresnel_dielectric(1.0, eta).0;
                 m.ks = specular.map(|s| s * f0);
                 m.ns = if alpha == 0.0 {
                     10000.0
@@ -302,17 +266,13 @@ impl<'a> Loader<'a> {
                     (0.0, Distribution::default())
                 };
                 let eta = self.ior(el, "int_ior", "bk7")? / self.ior(el, "ext_ior", "air")?;
-                for k in ["specular_reflectance", "specular_transmittance"] {
+                let mut tint = Tint::NONE;
+                for (k, v) in [
+                    ("specular_reflectance", &mut tint.reflect),
+                    ("specular_transmittance", &mut tint.transmit),
+                ] {
                     if let Some(c) = self.constant(el, k, Use::Reflectance, kind)? {
-                        if c != [1.0; 3] {
-                            self.warn(
-                                &format!("{kind} {k}"),
-                                format!(
-                                    "{}: {kind} {k} other than 1 is not supported: rendered as 1",
-                                    el.at
-                                ),
-                            );
-                        }
+                        *v = c;
                     }
                 }
                 m.kd = [0.0; 3];
@@ -320,13 +280,14 @@ impl<'a> Loader<'a> {
                 if kind == "thindielectric" {
                     // no refraction of the direction: an index of 1 (see-through) is closest
                     m.ni = 1.0;
-                    m.model = Some(SurfaceModel::ThinDielectric { eta });
+                    m.model = Some(SurfaceModel::ThinDielectric { eta, tint });
                 } else {
                     m.ni = eta;
                     m.model = Some(SurfaceModel::Dielectric {
                         eta,
                         alpha,
                         distribution,
+                        tint,
                     });
                 }
             }
@@ -344,18 +305,15 @@ impl<'a> Loader<'a> {
                 let mut inner_m = self.bsdf(inner)?;
                 match kind {
                     "mask" => {
-                        let op = self.prop(el, "opacity");
-                        self.mark_all(el);
-                        self.warn(
-                            "bsdf mask",
-                            format!(
-                                "{}: mask (opacity{}) is not supported: rendered opaque",
-                                el.at,
-                                op.and_then(|o| o.attr("value"))
-                                    .map(|v| format!(" {v}"))
-                                    .unwrap_or_default()
-                            ),
-                        );
+                        // a cut-out: the opacity's share of light meets the nested BSDF,
+                        // the rest passes (Mitsuba's default opacity 0.5)
+                        match self.color(el, "opacity", Use::Reflectance)? {
+                            None => inner_m.opacity *= 0.5,
+                            Some(Color::Rgb(v)) => inner_m.opacity *= (v[0] + v[1] + v[2]) / 3.0,
+                            Some(Color::Bitmap(p, sampling)) => {
+                                inner_m.map_opacity = Some((p, sampling, OpacityFrom::Luminance));
+                            }
+                        }
                     }
                     "bumpmap" | "normalmap" => {
                         self.mark_all(el);

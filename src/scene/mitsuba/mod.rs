@@ -7,14 +7,16 @@
 //!   step left-multiplies), `flip_normals`, `face_normals`, `flip_tex_coords`;
 //! - BSDFs `diffuse`, `conductor`, `roughconductor`, `plastic`, `roughplastic`,
 //!   `dielectric`, `roughdielectric`, `thindielectric` (into `MaterialDesc.model`, rough
-//!   ones with their `distribution`, Beckmann unless it says ggx; the MTL fields are set
-//!   close to them too), `twosided`, `mask`,
-//!   `bumpmap`, `normalmap` (the nested BSDF; opacity and bumps warned), Mitsuba 0.6's
-//!   `phong` and `roughdiffuse`;
+//!   ones with their `distribution`, Beckmann unless it says ggx; dielectrics with their
+//!   `specular_reflectance` / `specular_transmittance` tints; the MTL fields are set
+//!   close to them too), `twosided`, `mask` (its `opacity`, a constant or a bitmap: a
+//!   cut-out that rays pass through, on any shape), `bumpmap`, `normalmap` (the nested
+//!   BSDF; bumps warned), Mitsuba 0.6's `phong` and `roughdiffuse`;
 //! - `rgb`, `srgb`, `spectrum` (a constant, `wavelength:value` lists and `.spd` files,
 //!   integrated against the CIE 1931 curves as Mitsuba's RGB mode does: reflectances under
-//!   D65, emission as an equal-energy spectrum), `bitmap` textures (`map_kd` for diffuse
-//!   reflectances; the texture's mean, warned, in other slots);
+//!   D65, emission as an equal-energy spectrum), `bitmap` textures with `filter_type`
+//!   (bilinear, nearest), `wrap_mode` (repeat, mirror, clamp) and `to_uv` (`map_kd` for
+//!   diffuse reflectances, a mask's opacity; the texture's mean, warned, in other slots);
 //! - emitters `area` (on a shape: `ke`), `point`, `constant`, `envmap`;
 //! - the `perspective` sensor (`fov`, `fov_axis`, `focal_length`, `to_world`) into
 //!   `CameraDesc`, `hdrfilm` width and height, the integrator's `max_depth` and the

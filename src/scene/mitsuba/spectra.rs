@@ -15,8 +15,8 @@ pub(super) enum Use {
 /// A colour-valued parameter.
 pub(super) enum Color {
     Rgb([f32; 3]),
-    /// A bitmap texture: its file.
-    Bitmap(PathBuf),
+    /// A bitmap texture: its file and how it is looked up.
+    Bitmap(PathBuf, crate::scene::texture::Sampling),
 }
 
 /// What is said of a negative colour value.
@@ -463,35 +463,23 @@ impl<'a> Loader<'a> {
                         let path = self.path(&f);
                         crate::input::check_regular_file(&path, crate::input::max_input_bytes()?)
                             .map_err(|e| format!("{}: bitmap texture: {e}", p.at))?;
-                        for k in ["filter_type", "wrap_mode", "raw", "format"] {
+                        let sampling = self.bitmap_sampling(p)?;
+                        for k in ["raw", "format"] {
                             if let Some(c) = self.prop(p, k) {
                                 let v = c.attr("value").unwrap_or("");
-                                let fine = matches!(
-                                    (k, v),
-                                    ("filter_type", "bilinear")
-                                        | ("wrap_mode", "repeat")
-                                        | ("raw", "false")
-                                );
-                                if !fine {
+                                if !matches!((k, v), ("raw", "false")) {
                                     self.warn(
                                         &format!("bitmap {k}"),
                                         format!(
-                                            "{}: bitmap {k} '{v}' is not supported: bilinear, repeating, sRGB-decoded 8-bit or linear EXR",
+                                            "{}: bitmap {k} '{v}' is not supported: sRGB-decoded 8-bit or linear EXR",
                                             c.at
                                         ),
                                     );
                                 }
                             }
                         }
-                        if let Some(t) = self.prop(p, "to_uv") {
-                            t.used.set(true);
-                            self.warn(
-                                "bitmap to_uv",
-                                format!("{}: bitmap to_uv is not supported: ignored", t.at),
-                            );
-                        }
                         self.unused(p, "texture 'bitmap'");
-                        Ok(Color::Bitmap(path))
+                        Ok(Color::Bitmap(path, sampling))
                     }
                     "checkerboard" => {
                         let a = self.color(p, "color0", use_)?;
@@ -534,11 +522,46 @@ impl<'a> Loader<'a> {
         }
     }
 
+    /// A bitmap's `filter_type`, `wrap_mode` and `to_uv`.
+    fn bitmap_sampling(&self, p: &'a El) -> R<crate::scene::texture::Sampling> {
+        use crate::scene::texture::{Sampling, Wrap};
+        let mut s = Sampling::default();
+        match self.string(p, "filter_type")?.as_deref() {
+            None | Some("bilinear") => {}
+            Some("nearest") => s.nearest = true,
+            Some(v) => {
+                return Err(format!(
+                    "{}: bitmap filter_type \"{v}\": must be \"bilinear\" or \"nearest\"",
+                    p.at
+                ))
+            }
+        }
+        s.wrap = match self.string(p, "wrap_mode")?.as_deref() {
+            None | Some("repeat") => Wrap::Repeat,
+            Some("mirror") => Wrap::Mirror,
+            Some("clamp") => Wrap::Clamp,
+            Some(v) => {
+                return Err(format!(
+                    "{}: bitmap wrap_mode \"{v}\": must be \"repeat\", \"mirror\" or \"clamp\"",
+                    p.at
+                ))
+            }
+        };
+        let m = self.transform(p, "to_uv")?;
+        s.to_uv = [
+            m.x_axis.x, m.y_axis.x, m.w_axis.x, m.x_axis.y, m.y_axis.y, m.w_axis.y,
+        ];
+        if !s.to_uv.iter().all(|v| v.is_finite()) {
+            return Err(format!("{}: bitmap to_uv is not finite", p.at));
+        }
+        Ok(s)
+    }
+
     /// The mean of a colour (a bitmap's mean texel).
     pub(super) fn mean_rgb(&self, c: Color, at: &str) -> R<[f32; 3]> {
         match c {
             Color::Rgb(v) => Ok(v),
-            Color::Bitmap(p) => crate::scene::Texture::load(&p)
+            Color::Bitmap(p, _) => crate::scene::Texture::load(&p)
                 .map(|t| t.mean())
                 .map_err(|e| format!("{at}: {e}")),
         }
@@ -555,7 +578,7 @@ impl<'a> Loader<'a> {
         match self.color(el, name, use_)? {
             None => Ok(None),
             Some(Color::Rgb(v)) => Ok(Some(v)),
-            Some(c @ Color::Bitmap(_)) => {
+            Some(c @ Color::Bitmap(..)) => {
                 self.warn(
                     &format!("texture in {plugin} {name}"),
                     format!(

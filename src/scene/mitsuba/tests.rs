@@ -304,6 +304,146 @@ fn camera_follows_mitsuba_conventions() {
     assert!(e.unwrap_err().contains("fov_axis \"z\""));
 }
 
+/// Mitsuba 3.9.1 (scalar_rgb) evaluates `plastic` (diffuse_reflectance 0.5, int_ior 1.9)
+/// at normal incidence, wo = wi = n, to f cos = 0.152383: the reader keeps the diffuse
+/// reflectance as given and the Plastic model applies the coat once (it was applied
+/// twice: 0.96x at this index, 1.02x at 1.5).
+#[test]
+fn plastic_base_agrees_with_mitsuba() {
+    let d = scene(
+        r#"<shape type="rectangle"><bsdf type="plastic">
+        <rgb name="diffuse_reflectance" value="0.5"/><float name="int_ior" value="1.9"/>
+        </bsdf></shape>"#,
+    )
+    .unwrap();
+    let m = d.materials.last().unwrap();
+    assert_eq!(m.kd, [0.5; 3]);
+    let b = crate::scene::bsdf_of_model(m.model.as_ref().unwrap(), m.kd).unwrap();
+    let z = Vec3::Z;
+    let f = b.eval::<3>(z, z).0[0];
+    assert!((f - 0.152383).abs() < 2e-3 * 0.152383, "{f}");
+}
+
+/// A `mask` is a cut-out that rays pass: behind a quad of opacity 0.25, 3/4 of the rays
+/// (closest hits and shadow rays alike) reach the quad behind; with a bitmap of opacity,
+/// rays stop where it is white and pass where it is black (a known answer each).
+#[test]
+fn masked_quads_let_rays_through() {
+    use crate::math::Ray;
+    let dir = std::env::temp_dir().join(format!("kalos-mask-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // left half black (opacity 0), right half white (1)
+    image::GrayImage::from_fn(8, 8, |x, _| image::Luma([if x < 4 { 0 } else { 255 }]))
+        .save(dir.join("m.png"))
+        .unwrap();
+    let body = |opacity: &str| {
+        format!(
+            r#"<shape type="rectangle"><bsdf type="mask">{opacity}<bsdf type="diffuse"/></bsdf></shape>
+            <shape type="rectangle"><transform name="to_world"><translate z="-1"/></transform>
+            <bsdf type="diffuse"/></shape>"#
+        )
+    };
+    let build = |b: &str| {
+        let d = parse(
+            &format!("<scene version=\"3.0.0\">{b}</scene>"),
+            "t.xml",
+            &dir,
+        )
+        .unwrap();
+        crate::scene::Scene::build(d, 0.0).unwrap()
+    };
+    let s = build(&body(r#"<float name="opacity" value="0.25"/>"#));
+    assert!(s.cutouts);
+    let n = 40000;
+    let (mut front, mut blocked) = (0, 0);
+    for i in 0..n {
+        let x = (i % 200) as f32 / 200.0 * 1.6 - 0.8;
+        let y = (i / 200) as f32 / 200.0 * 1.6 - 0.8;
+        let r = Ray::new(Vec3::new(x, y, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        let h = s
+            .intersect(&r, f32::INFINITY)
+            .expect("the back quad is behind");
+        front += (h.p.z.abs() < 1e-3) as usize;
+        blocked += s.occluded(&r, 1.5) as usize;
+    }
+    let (f, b) = (front as f32 / n as f32, blocked as f32 / n as f32);
+    assert!((f - 0.25).abs() < 0.01, "closest hits on the mask: {f}");
+    assert!(
+        (b - 0.25).abs() < 0.01,
+        "shadow rays stopped by the mask: {b}"
+    );
+    let s = build(&body(
+        r#"<texture type="bitmap" name="opacity"><string name="filename" value="m.png"/>
+           <string name="filter_type" value="nearest"/></texture>"#,
+    ));
+    for (x, on_mask) in [(-0.5, false), (0.5, true)] {
+        for k in 0..50 {
+            let y = k as f32 / 50.0 - 0.5;
+            let r = Ray::new(Vec3::new(x, y, 1.0), Vec3::new(0.0, 0.0, -1.0));
+            let h = s.intersect(&r, f32::INFINITY).unwrap();
+            assert_eq!(h.p.z.abs() < 1e-3, on_mask, "x {x} y {y}");
+            assert_eq!(s.occluded(&r, 1.5), on_mask, "x {x} y {y}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Mitsuba 3.9.1 (scalar_rgb) samples a `dielectric` of int_ior 1.5 with
+/// specular_reflectance (0.2, 0.4, 0.6) and specular_transmittance (0.9, 0.5, 0.1) at
+/// normal incidence to weights (0.2, 0.4, 0.6) reflected and (0.400222, 0.222345,
+/// 0.0444691) = (0.9, 0.5, 0.1) / eta^2 refracted (radiance mode); the rough and thin ones scale their lobes the same way
+/// (the tints were warned and rendered as 1).
+#[test]
+fn dielectric_tints_scale_reflection_and_transmission() {
+    let tints = r#"<rgb name="specular_reflectance" value="0.2 0.4 0.6"/>
+        <rgb name="specular_transmittance" value="0.9 0.5 0.1"/>"#;
+    let bsdf = |kind: &str, extra: &str| {
+        let d = scene(&format!(
+            r#"<shape type="rectangle"><bsdf type="{kind}">{tints}{extra}</bsdf></shape>"#
+        ))
+        .unwrap();
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+        let m = d.materials.last().unwrap();
+        crate::scene::bsdf_of_model(m.model.as_ref().unwrap(), m.kd).unwrap()
+    };
+    let wo = Vec3::Z;
+    let b = bsdf("dielectric", r#"<float name="int_ior" value="1.5"/>"#);
+    let r = b.sample::<3>(wo, 0.0, Vec2::ZERO).unwrap();
+    assert!(r.wi.z > 0.0);
+    assert_eq!(r.weight.0, [0.2, 0.4, 0.6]);
+    let t = b.sample::<3>(wo, 0.99, Vec2::ZERO).unwrap();
+    assert!(t.wi.z < 0.0);
+    // Mitsuba's weights (eta = 1.5 / 1.000277, the index of air)
+    for (w, m) in t.weight.0.iter().zip([0.400222, 0.222345, 0.0444691]) {
+        assert!((w - m).abs() < 2e-6, "{w}");
+    }
+    let b = bsdf("thindielectric", "");
+    assert_eq!(
+        b.sample::<3>(wo, 0.0, Vec2::ZERO).unwrap().weight.0,
+        [0.2, 0.4, 0.6]
+    );
+    assert_eq!(
+        b.sample::<3>(wo, 0.99, Vec2::ZERO).unwrap().weight.0,
+        [0.9, 0.5, 0.1]
+    );
+    // rough: the same lobes as without tints, each scaled by its tint
+    let rough = bsdf("roughdielectric", r#"<float name="alpha" value="0.3"/>"#);
+    let plain = scene(r#"<shape type="rectangle"><bsdf type="roughdielectric"><float name="alpha" value="0.3"/></bsdf></shape>"#).unwrap();
+    let pm = plain.materials.last().unwrap();
+    let plain = crate::scene::bsdf_of_model(pm.model.as_ref().unwrap(), pm.kd).unwrap();
+    let wo = Vec3::new(0.3, 0.0, 0.9).normalize();
+    for (wi, tint) in [
+        (Vec3::new(-0.2, 0.1, 0.95).normalize(), [0.2, 0.4, 0.6]),
+        (Vec3::new(-0.2, 0.1, -0.95).normalize(), [0.9, 0.5, 0.1]),
+    ] {
+        let (f, g) = (rough.eval::<3>(wo, wi).0, plain.eval::<3>(wo, wi).0);
+        assert!(g[0] > 0.0);
+        for c in 0..3 {
+            assert!((f[c] - g[c] * tint[c]).abs() <= 1e-6 * g[c], "{f:?} {g:?}");
+        }
+    }
+}
+
 // ----------------------------------------------------------------------------------------
 // Hostile input: each of these crashed, hung or rendered a wrong image before its limit
 // (a reference cycle and deep nesting overflowed the stack and aborted the test runner)
