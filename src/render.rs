@@ -13,7 +13,9 @@ use crate::image_io::RgbImage;
 use crate::integrator::{
     Counters, Gather, Integrator, IntegratorKind, IntegratorSettings, MisHeuristic, Roulette,
 };
-use crate::options::{name, parse_depth, parse_res, parse_seconds, parse_spp, parse_threads};
+use crate::options::{
+    name, parse_define, parse_depth, parse_res, parse_seconds, parse_spp, parse_threads,
+};
 use crate::pipeline::{
     self, Budget, DtfBudget, DtfRun, Progress, RenderSettings, RwBudget, RwParams, RwRun, RwStats,
 };
@@ -56,6 +58,10 @@ pub struct RenderJob {
     /// argument).
     #[arg(skip)]
     pub scene: String,
+    /// A parameter of a Mitsuba .xml scene, as Mitsuba's `-D key=value`: it replaces the
+    /// file's `<default name="key">` (repeatable; a name the file does not use is an error).
+    #[arg(short = 'D', long = "define", value_name = "KEY=VALUE", value_parser = parse_define)]
+    pub defines: Vec<(String, String)>,
     /// Samples per pixel (default 64, or the scene file's).
     #[arg(long, conflicts_with = "time", value_parser = parse_spp)]
     pub spp: Option<u32>,
@@ -317,7 +323,7 @@ pub fn thread_pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, Option<
 /// Load the job's scene and render it.
 pub fn render(job: &RenderJob, progress: &dyn Progress) -> Result<Rendered, String> {
     job.validate()?;
-    let scene = crate::scene::load(&job.scene)?;
+    let scene = crate::scene::load_with(&job.scene, &job.defines)?;
     let mut r = render_scene(&scene, job, progress)?;
     let mut w = scene.warnings_for(job.camera.is_some());
     w.append(&mut r.warnings);

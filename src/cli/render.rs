@@ -400,7 +400,7 @@ fn write_bdpt_strategies(
     progress: &dyn crate::progress::Progress,
 ) -> Result<(), String> {
     use crate::pipeline::strategies::{render_strategies, DEFAULT_MAX_LENGTH};
-    let scene = crate::scene::load(&job.scene)?;
+    let scene = crate::scene::load_with(&job.scene, &job.defines)?;
     let images = render_strategies(&scene, job, DEFAULT_MAX_LENGTH, progress)?;
     let set = job.settings(&scene);
     for im in &images {

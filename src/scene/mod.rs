@@ -570,13 +570,35 @@ pub fn default_camera(b: &Bounds3) -> CameraDesc {
 /// Load a scene named on the command line: a built-in name, an `.obj`, a `.toml` or a
 /// Mitsuba `.xml` file.
 pub fn load(spec: &str) -> Result<Scene, String> {
+    load_with(spec, &[])
+}
+
+/// [`load`] with Mitsuba's defines (`-D key=value`: each replaces the scene file's
+/// `<default>` of that name); only Mitsuba .xml scenes take them.
+pub fn load_with(spec: &str, defines: &[(String, String)]) -> Result<Scene, String> {
     let t0 = Instant::now();
-    let desc = load_desc(spec)?;
+    let desc = load_desc_with(spec, defines)?;
     Scene::build(desc, t0.elapsed().as_secs_f64())
 }
 
 /// Read a scene description without building it.
 pub fn load_desc(spec: &str) -> Result<SceneDesc, String> {
+    load_desc_with(spec, &[])
+}
+
+/// [`load_desc`] with defines (see [`load_with`]).
+pub fn load_desc_with(spec: &str, defines: &[(String, String)]) -> Result<SceneDesc, String> {
+    let is_xml = Path::new(spec)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    if let (Some((k, v)), false) = (defines.first(), is_xml) {
+        return Err(format!(
+            "-D {k}={v}: {spec}: only Mitsuba .xml scenes take defines"
+        ));
+    }
+    if is_xml {
+        return mitsuba::load_with(Path::new(spec), defines);
+    }
     if let Some(desc) = builtin::load(spec)? {
         return Ok(desc);
     }

@@ -2,6 +2,10 @@
 
 use super::*;
 
+/// An emitter's radiance or intensity when the file gives none: Mitsuba's default 1.0
+/// (its `texture_d65`, which in RGB mode is white (1, 1, 1), not an equal-energy spectrum).
+pub(super) const UNIT_EMISSION: [f32; 3] = [1.0; 3];
+
 impl<'a> Loader<'a> {
     pub(super) fn emitter(&mut self, el: &'a El) -> R<()> {
         let kind = el.kind();
@@ -16,7 +20,7 @@ impl<'a> Loader<'a> {
                     .unwrap_or_else(|| xf.transform_point3(Vec3::ZERO));
                 let intensity = self
                     .constant(el, "intensity", Use::Unbounded, "point emitter")?
-                    .unwrap_or_else(|| spectrum_to_rgb(&[360.0, 830.0], &[1.0, 1.0], false));
+                    .unwrap_or(UNIT_EMISSION);
                 self.desc.point_lights.push(PointLightDesc {
                     position: p,
                     intensity,
@@ -28,7 +32,7 @@ impl<'a> Loader<'a> {
                 let (radiance, map) = if kind == "constant" {
                     let r = self
                         .constant(el, "radiance", Use::Unbounded, "constant emitter")?
-                        .unwrap_or_else(|| spectrum_to_rgb(&[360.0, 830.0], &[1.0, 1.0], false));
+                        .unwrap_or(UNIT_EMISSION);
                     (r, None)
                 } else {
                     let f = self

@@ -48,11 +48,13 @@ use reader::*;
 pub use spectra::spectrum_to_rgb;
 use spectra::*;
 use std::cell::{Cell, RefCell};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 struct Loader<'a> {
     dir: PathBuf,
+    /// The `<path>` folders (see `reader::resolve`).
+    search: Vec<PathBuf>,
     desc: SceneDesc,
     ids: HashMap<&'a str, &'a El>,
     /// Material index of a BSDF element (by address: a shared `id` is one material).
@@ -83,11 +85,18 @@ impl<'a> Loader<'a> {
 
 /// Load a Mitsuba XML scene file.
 pub fn load(path: &Path) -> Result<SceneDesc, String> {
+    load_with(path, &[])
+}
+
+/// Load a Mitsuba XML scene file with parameters set as Mitsuba's `-D key=value` and
+/// `mi.load_file(path, key=value)` set them: each replaces the `<default>` of that name.
+pub fn load_with(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc, String> {
     let text = crate::input::read_text(path)?;
-    parse(
+    parse_with(
         &text,
         &path.display().to_string(),
         path.parent().unwrap_or(Path::new(".")),
+        defines,
     )
 }
 
@@ -110,19 +119,33 @@ fn one_line(s: String) -> String {
 
 /// Parse Mitsuba XML text; relative file names resolve against `dir`.
 pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
-    let mut d = parse_inner(text, file, dir).map_err(one_line)?;
+    parse_with(text, file, dir, &[])
+}
+
+/// [`parse`] with defines (see [`load_with`]).
+pub fn parse_with(
+    text: &str,
+    file: &str,
+    dir: &Path,
+    defines: &[(String, String)],
+) -> Result<SceneDesc, String> {
+    let mut d = parse_inner(text, file, dir, defines).map_err(one_line)?;
     d.warnings = d.warnings.into_iter().map(one_line).collect();
     Ok(d)
 }
 
-fn parse_inner(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
-    let mut reader = Reader {
-        defaults: HashMap::new(),
-        warnings: Vec::new(),
-    };
+fn parse_inner(
+    text: &str,
+    file: &str,
+    dir: &Path,
+    defines: &[(String, String)],
+) -> Result<SceneDesc, String> {
+    let mut reader = Reader::new(defines);
     let top = reader.read_text(text, file, dir, 0)?;
+    reader.check_defines(defines, file)?;
     let mut ld = Loader {
         dir: dir.to_path_buf(),
+        search: std::mem::take(&mut reader.search),
         desc: SceneDesc {
             name: Path::new(file)
                 .file_stem()
@@ -184,7 +207,7 @@ fn parse_inner(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> 
             "emitter" => ld.emitter(el)?,
             "sensor" => ld.sensor(el)?,
             "integrator" => ld.integrator(el)?,
-            "path" | "alias" => ld.warn(
+            "alias" => ld.warn(
                 &el.tag,
                 format!("{}: <{}> is not supported: ignored", el.at, el.tag),
             ),

@@ -215,16 +215,19 @@ impl<'a> Loader<'a> {
                     ),
                 );
             }
-            // Mitsuba's AOV integrator: the radiance is its nested integrator's
-            "aov" => {
+            // Mitsuba's AOV and moment integrators: the radiance is their nested
+            // integrator's (moment adds the second moment, which kalos' film keeps anyway)
+            "aov" | "moment" => {
                 self.mark_all(el);
-                self.warn(
-                    "integrator aov",
-                    format!(
-                        "{}: integrator 'aov': kalos renders the radiance of the nested integrator, without the AOVs (see --aovs)",
-                        el.at
-                    ),
-                );
+                if kind == "aov" {
+                    self.warn(
+                        "integrator aov",
+                        format!(
+                            "{}: integrator 'aov': kalos renders the radiance of the nested integrator, without the AOVs (see --aovs)",
+                            el.at
+                        ),
+                    );
+                }
                 for c in el.children.iter().filter(|c| c.tag == "integrator") {
                     self.integrator(c)?;
                 }
