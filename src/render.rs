@@ -78,9 +78,10 @@ pub struct RenderJob {
     /// Rendering method: plain (same spp everywhere) or dtf (dependent-tests driven filtering).
     #[arg(long, value_enum, default_value_t = Method::Plain)]
     pub method: Method,
-    /// Estimator.
-    #[arg(long, value_enum, default_value_t = IntegratorKind::Path)]
-    pub integrator: IntegratorKind,
+    /// Estimator (default: the scene file's, e.g. a Mitsuba `<integrator type="bdpt">`,
+    /// else path).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorKind>,
     /// A filter on the finished image: energy (Rushmeier and Ward's energy-preserving
     /// filter, with --rw-d and --rw-t; Lt_vis from the image's mean, S_p and M from the
     /// film). `--method rw` ends with it already.
@@ -158,6 +159,13 @@ impl RenderJob {
         serde_json::to_string(&j).unwrap_or_default()
     }
 
+    /// The estimator: the job's, else the scene file's, else the path tracer.
+    pub fn integrator_for(&self, scene: &Scene) -> IntegratorKind {
+        self.integrator
+            .or(scene.defaults.integrator)
+            .unwrap_or_default()
+    }
+
     /// The settings that decide a sample's value, for this scene.
     pub fn settings(&self, scene: &Scene) -> RenderSettings {
         let (width, height) = self.res.or(scene.defaults.res).unwrap_or(DEFAULT_RES);
@@ -172,7 +180,7 @@ impl RenderJob {
                 dependent: self.dependent,
             },
             integrator: IntegratorSettings {
-                kind: self.integrator,
+                kind: self.integrator_for(scene),
                 max_depth: self.max_depth.or(scene.defaults.max_depth).unwrap_or(-1),
                 roulette: Roulette {
                     min_depth: Some(
@@ -532,7 +540,7 @@ pub fn render_scene(
         sampler: job.sampler,
         dependent: job.dependent,
         max_depth: set.integrator.max_depth,
-        integrator: job.integrator,
+        integrator: set.integrator.kind,
         rr: job.roulette.mode,
         rr_weight: job.roulette.weight,
         rr_min_depth: set.integrator.roulette.min_depth.unwrap_or(0),
@@ -566,7 +574,7 @@ mod tests {
     fn defaults_are_the_documented_ones_everywhere() {
         let j = RenderJob::default();
         assert_eq!(j.method, Method::Plain);
-        assert_eq!(j.integrator, IntegratorKind::Path);
+        assert_eq!(j.integrator, None);
         assert_eq!(j.spectral, SpectralMode::Rgb);
         assert_eq!(j.sampler, SamplerKind::Random);
         assert_eq!(

@@ -13,7 +13,8 @@
 //! `KNOWN_FAILURES` lists the scenes that do not pass yet, each with its reason; the test
 //! fails when one of them passes (so the list stays true) or when another scene fails.
 //! `KALOS_CONFORMANCE_REPORT=docs/results/mitsuba-conformance.md cargo test --release
-//! --test mitsuba_conformance` rewrites the results page.
+//! --test mitsuba_conformance` rewrites the results page; `KALOS_CONFORMANCE_IMAGES=folder`
+//! keeps kalos' images there.
 
 use kalos::image_io::read_image;
 use kalos::pipeline::Silent;
@@ -132,6 +133,10 @@ fn run(scene: &Path) -> Outcome {
         job.seed = 0;
         let r = kalos::render_scene(&loaded, &job, &Silent)?;
         let img = &r.image;
+        if let Some(dir) = std::env::var_os("KALOS_CONFORMANCE_IMAGES") {
+            let out = Path::new(&dir).join(format!("{name}.exr"));
+            kalos::image_io::write_image(&out, img, 1.0, &[])?;
+        }
         if (img.width, img.height) != (reference.width, reference.height) {
             return Err(format!(
                 "kalos renders {}x{}, the reference is {}x{}",
@@ -239,7 +244,11 @@ fn mitsubas_render_tests() {
         return;
     };
     let all = scenes(&root.join("mitsuba/tests/scenes"));
-    assert_eq!(all.len(), 29, "Mitsuba's render tests outside participating media");
+    assert_eq!(
+        all.len(),
+        29,
+        "Mitsuba's render tests outside participating media"
+    );
     for (n, _) in KNOWN_FAILURES {
         assert!(
             all.iter().any(|p| p.file_stem().unwrap() == *n),

@@ -152,7 +152,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     let job = a.job();
     job.validate()?;
     if a.bdpt_strategies {
-        if job.integrator != crate::integrator::IntegratorKind::Bdpt {
+        if job.integrator != Some(crate::integrator::IntegratorKind::Bdpt) {
             return Err(
                 "--bdpt-strategies: the strategy images are BDPT's; add --integrator bdpt".into(),
             );

@@ -77,10 +77,11 @@ pub fn render_strategies(
     max_length: u32,
     progress: &dyn Progress,
 ) -> Result<Vec<StrategyImage>, String> {
-    if job.integrator != IntegratorKind::Bdpt {
+    let kind = job.integrator_for(scene);
+    if kind != IntegratorKind::Bdpt {
         return Err(format!(
             "--bdpt-strategies: the strategy images are BDPT's; add --integrator bdpt (not {})",
-            crate::options::name(&job.integrator)
+            crate::options::name(&kind)
         ));
     }
     job.validate()?;

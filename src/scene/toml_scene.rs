@@ -427,6 +427,7 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
         desc.point_lights.push(super::PointLightDesc {
             position: Vec3::from(p.position),
             intensity: p.intensity,
+            shape: Default::default(),
             source: Some(format!("{file} point_lights[{i}]")),
         });
     }
@@ -454,6 +455,7 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             spp: r.spp,
             max_depth: r.max_depth,
             rr_min_depth: None,
+            integrator: None,
         };
     }
     Ok(desc)

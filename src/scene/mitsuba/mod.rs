@@ -1,7 +1,10 @@
 //! Mitsuba 3 XML scenes (and Mitsuba 0.6 files, whose camelCase parameter names are
 //! upgraded as Mitsuba 3 does): the subset research scenes use, read into a `SceneDesc`.
 //!
-//! - `<scene version>`, `<default>` and `$name` substitution, `<include>`, `id` / `ref`;
+//! - `<scene version>`, `<default>` and `$name` substitution (a define, `-D key=value` or
+//!   `kalos.load(path, key=value)`, replaces the `<default>` of its name; one the file never
+//!   names is an error), `<include>`, `id` / `ref`, `<path>` search folders (every file
+//!   name is looked up in them, the one read last first, then beside the scene file);
 //! - shapes `obj`, `ply`, `rectangle`, `cube`, `sphere` (tessellated), `disk`, with
 //!   `to_world` (`matrix`, `translate`, `rotate`, `scale`, `lookat`, composed in order: each
 //!   step left-multiplies), `flip_normals`, `face_normals`, `flip_tex_coords`;
@@ -15,10 +18,17 @@
 //!   integrated against the CIE 1931 curves as Mitsuba's RGB mode does: reflectances under
 //!   D65, emission as an equal-energy spectrum), `bitmap` textures (`map_kd` for diffuse
 //!   reflectances; the texture's mean, warned, in other slots);
-//! - emitters `area` (on a shape: `ke`), `point`, `constant`, `envmap`;
+//! - emitters `area` (on a shape: `ke`), `point`, `spot` (`cutoff_angle`, `beam_width`,
+//!   a bitmap `texture` projected over the cone), `directional` (`irradiance`, `direction`
+//!   or +z of `to_world`), `constant`, `envmap`; unset radiance and intensity are white
+//!   (1, 1, 1) as in Mitsuba's RGB mode;
 //! - the `perspective` sensor (`fov`, `fov_axis`, `focal_length`, `to_world`) into
 //!   `CameraDesc`, `hdrfilm` width and height, the integrator's `max_depth` and the
-//!   sampler's `sample_count` into `RenderDefaults`.
+//!   sampler's `sample_count` into `RenderDefaults`;
+//! - integrators: `path` and `bdpt` select kalos' estimator of that name (`--integrator`
+//!   overrides), `direct` is the path tracer at max_depth 2 (the same estimator: emitter and
+//!   BSDF sampling with MIS), `moment` and `aov` are read as their nested integrator,
+//!   `ptracer`, `volpath` and the others are rendered by the path tracer, and said so.
 //!
 //! Camera convention: Mitsuba's camera looks along +z of its `to_world`, +y is up and the
 //! image's x axis runs along -x; kalos' right vector is forward x up, the same direction
@@ -39,7 +49,8 @@ mod spectra;
 mod tests;
 
 use super::{
-    CameraDesc, EnvironmentDesc, FovAxis, MaterialDesc, PointLightDesc, SceneDesc, SurfaceModel,
+    CameraDesc, EnvironmentDesc, FovAxis, MaterialDesc, PointLightDesc, PointLightShape, SceneDesc,
+    SurfaceModel,
 };
 use crate::material::Distribution;
 use glam::{Mat3, Mat4, Vec2, Vec3};

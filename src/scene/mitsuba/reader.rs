@@ -129,7 +129,11 @@ impl Reader {
     }
 
     /// Refuse a define that names no parameter of the scene (a typo would be ignored).
-    pub(super) fn check_defines(&self, defines: &[(String, String)], file: &str) -> Result<(), String> {
+    pub(super) fn check_defines(
+        &self,
+        defines: &[(String, String)],
+        file: &str,
+    ) -> Result<(), String> {
         for (k, v) in defines {
             if !self.declared.contains(k) {
                 return Err(format!(
