@@ -8,8 +8,8 @@
 //! next-event estimation only; isotropic, spots, or directional: Dirac in direction) and one environment (`env`: light from infinitely far
 //! away, seen by rays that leave the scene). Next-event estimation first chooses among
 //! the kinds (`Lights::choose`) in proportion to their power: the area lights together
-//! (sum of pi A L), each point light (4 pi I; a spot's cone 2 pi (1 - cos cutoff) I; a
-//! directional light pi R^2 E) and the environment (pi^2 R^2 times its mean
+//! (sum of pi A L), each point light (4 pi I, a spot too; a directional light pi R^2 E)
+//! and the environment (pi^2 R^2 times its mean
 //! radiance, R the radius of the scene's bounding sphere, the power it sends through a
 //! disk of the scene's size). With area lights only the choice is skipped, so such scenes
 //! render as before.
@@ -150,10 +150,9 @@ impl PointLight {
             .luminance()
             .max(0.0);
         match &self.shape {
-            PointShape::Isotropic => 4.0 * std::f32::consts::PI * lum,
-            PointShape::Spot(s) => {
-                2.0 * std::f32::consts::PI * (1.0 - s.cutoff.cos()).max(1e-4) * lum
-            }
+            // a spot weighs as the point light of its intensity: its cone's power alone
+            // would starve it beside an environment lighting the same surfaces
+            PointShape::Isotropic | PointShape::Spot(_) => 4.0 * std::f32::consts::PI * lum,
             PointShape::Directional(_) => std::f32::consts::PI * radius * radius * lum,
         }
     }
