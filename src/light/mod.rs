@@ -120,7 +120,7 @@ impl Spot {
     pub fn falloff(&self, d: Vec3) -> [f32; 3] {
         let l = (self.to_local * d).normalize_or_zero();
         let cos = l.z;
-        if !(cos > self.cutoff.cos()) {
+        if cos.partial_cmp(&self.cutoff.cos()) != Some(std::cmp::Ordering::Greater) {
             return [0.0; 3];
         }
         let k = if cos >= self.beam_width.cos() {

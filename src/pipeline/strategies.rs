@@ -256,7 +256,7 @@ mod tests {
 
     fn job() -> RenderJob {
         let mut j = RenderJob::new("cornell");
-        j.integrator = IntegratorKind::Bdpt;
+        j.integrator = Some(IntegratorKind::Bdpt);
         j.res = Some((12, 10));
         j.spp = Some(4);
         j.max_depth = Some(3);
@@ -297,7 +297,7 @@ mod tests {
     fn refused_without_bdpt() {
         let scene = crate::scene::load("cornell").unwrap();
         let mut j = job();
-        j.integrator = IntegratorKind::Path;
+        j.integrator = Some(IntegratorKind::Path);
         let e = render_strategies(&scene, &j, 4, &Silent).unwrap_err();
         assert!(e.contains("--integrator bdpt"), "{e}");
     }
