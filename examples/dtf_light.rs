@@ -28,7 +28,7 @@ fn main() {
     let mut job = RenderJob::new(&a[1]);
     job.res = Some((reference.width, reference.height));
     job.seed = seed;
-    job.integrator = IntegratorKind::Bdpt;
+    job.integrator = Some(IntegratorKind::Bdpt);
     let set = job.settings(&scene);
     let integ = kalos::integrator::Integrator::prepare(
         &scene,

@@ -56,11 +56,11 @@ fn main() {
     let mut job = RenderJob::new(&a[1]);
     job.res = Some((reference.width, reference.height));
     job.seed = seed;
-    job.integrator = match a.get(6).map(|s| s.as_str()) {
+    job.integrator = Some(match a.get(6).map(|s| s.as_str()) {
         None | Some("path") => IntegratorKind::Path,
         Some("bdpt") => IntegratorKind::Bdpt,
         Some(o) => panic!("integrator {o}: path or bdpt"),
-    };
+    });
     let set = job.settings(&scene);
     let dump = std::env::var("DTF_SWEEP_DUMP")
         .ok()

@@ -73,6 +73,18 @@ pub fn parse_spp(s: &str) -> Result<u32, String> {
     Ok(n)
 }
 
+/// `-D key=value`: a Mitsuba scene parameter (a name of letters, digits and `_`).
+pub fn parse_define(s: &str) -> Result<(String, String), String> {
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("{s:?}: expected key=value"))?;
+    let k = k.trim();
+    if k.is_empty() || !k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Err(format!("{s:?}: the name {k:?} is not a parameter name"));
+    }
+    Ok((k.to_string(), v.to_string()))
+}
+
 /// `--threads N`: at least 1.
 pub fn parse_threads(s: &str) -> Result<usize, String> {
     let n: usize = s

@@ -13,7 +13,9 @@ use crate::image_io::RgbImage;
 use crate::integrator::{
     Counters, Gather, Integrator, IntegratorKind, IntegratorSettings, MisHeuristic, Roulette,
 };
-use crate::options::{name, parse_depth, parse_res, parse_seconds, parse_spp, parse_threads};
+use crate::options::{
+    name, parse_define, parse_depth, parse_res, parse_seconds, parse_spp, parse_threads,
+};
 use crate::pipeline::{
     self, Budget, DtfBudget, DtfRun, Progress, RenderSettings, RwBudget, RwParams, RwRun, RwStats,
 };
@@ -56,6 +58,10 @@ pub struct RenderJob {
     /// argument).
     #[arg(skip)]
     pub scene: String,
+    /// A parameter of a Mitsuba .xml scene, as Mitsuba's `-D key=value`: it replaces the
+    /// file's `<default name="key">` (repeatable; a name the file does not use is an error).
+    #[arg(short = 'D', long = "define", value_name = "KEY=VALUE", value_parser = parse_define)]
+    pub defines: Vec<(String, String)>,
     /// Samples per pixel (default 64, or the scene file's).
     #[arg(long, conflicts_with = "time", value_parser = parse_spp)]
     pub spp: Option<u32>,
@@ -72,9 +78,10 @@ pub struct RenderJob {
     /// Rendering method: plain (same spp everywhere) or dtf (dependent-tests driven filtering).
     #[arg(long, value_enum, default_value_t = Method::Plain)]
     pub method: Method,
-    /// Estimator.
-    #[arg(long, value_enum, default_value_t = IntegratorKind::Path)]
-    pub integrator: IntegratorKind,
+    /// Estimator (default: the scene file's, e.g. a Mitsuba `<integrator type="bdpt">`,
+    /// else path).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorKind>,
     /// A filter on the finished image: energy (Rushmeier and Ward's energy-preserving
     /// filter, with --rw-d and --rw-t; Lt_vis from the image's mean, S_p and M from the
     /// film). `--method rw` ends with it already.
@@ -155,6 +162,13 @@ impl RenderJob {
         serde_json::to_string(&j).unwrap_or_default()
     }
 
+    /// The estimator: the job's, else the scene file's, else the path tracer.
+    pub fn integrator_for(&self, scene: &Scene) -> IntegratorKind {
+        self.integrator
+            .or(scene.defaults.integrator)
+            .unwrap_or_default()
+    }
+
     /// The settings that decide a sample's value, for this scene.
     pub fn settings(&self, scene: &Scene) -> RenderSettings {
         let (width, height) = self.res.or(scene.defaults.res).unwrap_or(DEFAULT_RES);
@@ -169,7 +183,7 @@ impl RenderJob {
                 dependent: self.dependent,
             },
             integrator: IntegratorSettings {
-                kind: self.integrator,
+                kind: self.integrator_for(scene),
                 max_depth: self.max_depth.or(scene.defaults.max_depth).unwrap_or(-1),
                 roulette: Roulette {
                     min_depth: Some(
@@ -347,7 +361,7 @@ pub fn thread_pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, Option<
 /// Load the job's scene and render it.
 pub fn render(job: &RenderJob, progress: &dyn Progress) -> Result<Rendered, String> {
     job.validate()?;
-    let scene = crate::scene::load(&job.scene)?;
+    let scene = crate::scene::load_with(&job.scene, &job.defines)?;
     let mut r = render_scene(&scene, job, progress)?;
     let mut w = scene.warnings_for(job.camera.is_some());
     w.append(&mut r.warnings);
@@ -571,7 +585,7 @@ pub fn render_scene(
         sampler: job.sampler,
         dependent: job.dependent,
         max_depth: set.integrator.max_depth,
-        integrator: job.integrator,
+        integrator: set.integrator.kind,
         rr: job.roulette.mode,
         rr_weight: job.roulette.weight,
         rr_min_depth: set.integrator.roulette.min_depth.unwrap_or(0),
@@ -606,7 +620,7 @@ mod tests {
     fn defaults_are_the_documented_ones_everywhere() {
         let j = RenderJob::default();
         assert_eq!(j.method, Method::Plain);
-        assert_eq!(j.integrator, IntegratorKind::Path);
+        assert_eq!(j.integrator, None);
         assert_eq!(j.spectral, SpectralMode::Rgb);
         assert_eq!(j.sampler, SamplerKind::Random);
         assert_eq!(

@@ -224,7 +224,7 @@ fn dtf_over_bdpt_with_light_paths_is_bit_identical_for_any_thread_count() {
     let scene = kalos::scene::load("caustic").unwrap();
     let go = |threads: usize| {
         let mut job = kalos::render::RenderJob::new("caustic");
-        job.integrator = kalos::integrator::IntegratorKind::Bdpt;
+        job.integrator = Some(kalos::integrator::IntegratorKind::Bdpt);
         job.method = kalos::render::Method::Dtf;
         job.res = Some((24, 20));
         job.spp = Some(24);

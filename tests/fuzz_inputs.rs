@@ -463,11 +463,14 @@ const XML: &str = r#"<scene version="3.0.0">
 </bsdf></bsdf></shape>
 <emitter type="point"><point name="position" value="0, 1, 0"/></emitter>
 <emitter type="constant"><spectrum name="radiance" value="0.5"/></emitter>
+<emitter type="spot"><float name="cutoff_angle" value="25"/><rgb name="intensity" value="3"/>
+<transform name="to_world"><lookat origin="0,2,0" target="0,0,0" up="0,0,1"/></transform></emitter>
+<emitter type="directional"><vector name="direction" value="0,-1,0"/><rgb name="irradiance" value="2"/></emitter>
 <sensor type="perspective"><float name="fov" value="45"/><string name="fov_axis" value="smaller"/>
 <transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
-<film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="8"/></film>
+<film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="8"/><rfilter type="box"/></film>
 <sampler type="independent"><integer name="sample_count" value="4"/></sampler></sensor>
-<integrator type="path"><integer name="max_depth" value="5"/></integrator>
+<integrator type="moment"><integrator type="path"><integer name="max_depth" value="5"/></integrator></integrator>
 </scene>"#;
 
 /// XML-specific damage on top of `mutate`: a character deleted or one of the markup

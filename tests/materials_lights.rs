@@ -307,6 +307,7 @@ fn point_light_over_a_diffuse_plane() {
         point_lights: vec![PointLightDesc {
             position: Vec3::new(0.0, 0.0, 1.0),
             intensity: [2.0, 2.0, 2.0],
+            shape: Default::default(),
             source: None,
         }],
         ..Default::default()

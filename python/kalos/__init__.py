@@ -150,14 +150,19 @@ def scenes() -> Dict[str, str]:
     return dict(_kalos.scenes())
 
 
-def load(scene: Union[str, os.PathLike]) -> Scene:
+def load(scene: Union[str, os.PathLike], **defines: Any) -> Scene:
     """Load a scene: a built-in name (see ``scenes()``), an .obj, a .toml or a
     Mitsuba .xml file.
+
+    Keyword arguments set a Mitsuba file's parameters as ``mi.load_file(path, spp=64)``
+    and ``-D spp=64`` do: each replaces the file's ``<default name="spp">`` (a name the
+    file does not use is a ``kalos.SceneError``).
 
     Raises FileNotFoundError for a missing file, ValueError for a name that is neither a
     built-in scene nor a scene file, and ``kalos.SceneError`` (with the loader's one-line
     ``file:line: what`` message) for a file kalos cannot read."""
-    return Scene(_kalos.load(os.fspath(scene)))
+    pairs = [(k, str(v).lower() if isinstance(v, bool) else str(v)) for k, v in defines.items()]
+    return Scene(_kalos.load(os.fspath(scene), pairs))
 
 
 def _scene(scene: Union[str, os.PathLike, Scene]) -> Scene:

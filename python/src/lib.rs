@@ -158,8 +158,10 @@ impl NativeScene {
 
 /// Load a scene: a built-in name, an .obj or a .toml file. FileNotFoundError for a missing
 /// file, ValueError for a name that is neither, SceneError for a file kalos cannot read.
+/// `defines`: a Mitsuba .xml file's parameters (`mi.load_file(path, spp=64)`), as strings.
 #[pyfunction]
-fn load(py: Python<'_>, spec: &str) -> PyResult<NativeScene> {
+#[pyo3(signature = (spec, defines = Vec::new()))]
+fn load(py: Python<'_>, spec: &str, defines: Vec<(String, String)>) -> PyResult<NativeScene> {
     if !kalos::scene::is_scene_spec(spec) {
         return Err(PyValueError::new_err(kalos::scene::not_a_scene(spec)));
     }
@@ -170,7 +172,7 @@ fn load(py: Python<'_>, spec: &str) -> PyResult<NativeScene> {
     }
     let s = spec.to_string();
     let scene = py
-        .detach(move || kalos::scene::load(&s))
+        .detach(move || kalos::scene::load_with(&s, &defines))
         .map_err(PyErr::new::<SceneError, _>)?;
     Ok(NativeScene {
         scene: Arc::new(scene),

@@ -166,7 +166,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     let job = a.job();
     job.validate()?;
     if a.bdpt_strategies {
-        if job.integrator != crate::integrator::IntegratorKind::Bdpt {
+        if job.integrator != Some(crate::integrator::IntegratorKind::Bdpt) {
             return Err(
                 "--bdpt-strategies: the strategy images are BDPT's; add --integrator bdpt".into(),
             );
@@ -427,7 +427,7 @@ fn write_bdpt_strategies(
     progress: &dyn crate::progress::Progress,
 ) -> Result<(), String> {
     use crate::pipeline::strategies::{render_strategies, DEFAULT_MAX_LENGTH};
-    let scene = crate::scene::load(&job.scene)?;
+    let scene = crate::scene::load_with(&job.scene, &job.defines)?;
     let images = render_strategies(&scene, job, DEFAULT_MAX_LENGTH, progress)?;
     let set = job.settings(&scene);
     for im in &images {

@@ -592,13 +592,35 @@ fn next_event_distant<const N: usize>(
     match kind {
         Chosen::Area(_) => None,
         Chosen::Point(i, pmf) => {
-            let pl = scene.lights.points()[i];
-            let d = pl.p - p;
-            let dist2 = d.length_squared();
-            if dist2 <= 0.0 || pmf <= 0.0 {
+            use crate::light::PointShape;
+            let pl = &scene.lights.points()[i];
+            if pmf <= 0.0 {
                 return None;
             }
-            let wi = d / dist2.sqrt();
+            // direction to the light, 1 / distance^2 (1 for a directional light) and the
+            // intensity towards p
+            let (wi, inv_d2, intensity) = match &pl.shape {
+                PointShape::Directional(dir) => (-*dir, 1.0, pl.intensity),
+                shape => {
+                    let d = pl.p - p;
+                    let dist2 = d.length_squared();
+                    if dist2 <= 0.0 {
+                        return None;
+                    }
+                    let wi = d / dist2.sqrt();
+                    let i = match shape {
+                        PointShape::Spot(s) => {
+                            let k = s.falloff(-wi);
+                            [0, 1, 2].map(|c| pl.intensity[c] * k[c])
+                        }
+                        _ => pl.intensity,
+                    };
+                    (wi, 1.0 / dist2, i)
+                }
+            };
+            if intensity.iter().all(|&v| v <= 0.0) {
+                return None;
+            }
             let wi_l = frame.to_local(wi);
             if !facing(bsdf.transmits(), wi, wi_l, ng) {
                 return None;
@@ -609,8 +631,11 @@ fn next_event_distant<const N: usize>(
             }
             let o = offset_origin(p, ng, wi);
             c.rays += 1;
-            let e = *beta * f * Spectrum::from_rgb(pl.intensity) * (1.0 / (dist2 * pmf));
-            Some((Ray::new(o, pl.p - o), SHADOW_T_MAX, e))
+            let e = *beta * f * Spectrum::from_rgb(intensity) * (inv_d2 / pmf);
+            Some(match pl.shape {
+                PointShape::Directional(_) => (Ray::new(o, wi), f32::INFINITY, e),
+                _ => (Ray::new(o, pl.p - o), SHADOW_T_MAX, e),
+            })
         }
         Chosen::Env(pmf) => {
             let env = scene.lights.env()?;

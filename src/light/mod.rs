@@ -5,10 +5,11 @@
 //! tracing, BDPT and radiosity shooting need.
 //!
 //! Besides the area lights a scene may have point lights (Dirac in position: reached by
-//! next-event estimation only) and one environment (`env`: light from infinitely far
+//! next-event estimation only; isotropic, spots, or directional: Dirac in direction) and one environment (`env`: light from infinitely far
 //! away, seen by rays that leave the scene). Next-event estimation first chooses among
 //! the kinds (`Lights::choose`) in proportion to their power: the area lights together
-//! (sum of pi A L), each point light (4 pi I) and the environment (pi^2 R^2 times its mean
+//! (sum of pi A L), each point light (4 pi I, a spot too; a directional light pi R^2 E)
+//! and the environment (pi^2 R^2 times its mean
 //! radiance, R the radius of the scene's bounding sphere, the power it sends through a
 //! disk of the scene's size). With area lights only the choice is skipped, so such scenes
 //! render as before.
@@ -65,12 +66,96 @@ impl LightSample {
     }
 }
 
-/// An isotropic point light.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A light reached by next-event estimation only (Dirac in position or direction): an
+/// isotropic point light, a spot light or a directional light.
+#[derive(Clone, Debug, PartialEq)]
 pub struct PointLight {
     pub p: Vec3,
-    /// Radiant intensity (W/sr), linear RGB.
+    /// Radiant intensity (W/sr), linear RGB; for a directional light its irradiance (W/m^2
+    /// on a surface facing it).
     pub intensity: [f32; 3],
+    pub shape: PointShape,
+}
+
+/// How a [`PointLight`] sends its light.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PointShape {
+    /// The same intensity in every direction.
+    Isotropic,
+    /// Mitsuba's spot light.
+    Spot(Spot),
+    /// Parallel light travelling along this unit direction, from infinitely far away.
+    Directional(Vec3),
+}
+
+/// Mitsuba's spot light: full intensity within `beam_width` of its axis (+z of its frame),
+/// falling off linearly in angle to zero at `cutoff`; a texture, if any, is projected over
+/// the cone (u, v = 0.5 + 0.5 x / (z tan cutoff), 0.5 + 0.5 y / (z tan cutoff), v
+/// downwards as Mitsuba's bitmaps).
+#[derive(Clone, Debug)]
+pub struct Spot {
+    /// World to the light's frame (the inverse of its `to_world` rotation and scale).
+    pub to_local: glam::Mat3,
+    /// Angles in radians.
+    pub cutoff: f32,
+    pub beam_width: f32,
+    pub texture: Option<Arc<crate::scene::texture::Texture>>,
+}
+
+impl PartialEq for Spot {
+    fn eq(&self, o: &Spot) -> bool {
+        let same_texture = match (&self.texture, &o.texture) {
+            (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+            (a, b) => a.is_none() && b.is_none(),
+        };
+        self.to_local == o.to_local
+            && self.cutoff == o.cutoff
+            && self.beam_width == o.beam_width
+            && same_texture
+    }
+}
+
+impl Spot {
+    /// The factor of the intensity towards world direction `d` (from the light).
+    pub fn falloff(&self, d: Vec3) -> [f32; 3] {
+        let l = (self.to_local * d).normalize_or_zero();
+        let cos = l.z;
+        if cos.partial_cmp(&self.cutoff.cos()) != Some(std::cmp::Ordering::Greater) {
+            return [0.0; 3];
+        }
+        let k = if cos >= self.beam_width.cos() {
+            1.0
+        } else {
+            (self.cutoff - cos.clamp(-1.0, 1.0).acos()) / (self.cutoff - self.beam_width)
+        };
+        match &self.texture {
+            None => [k; 3],
+            Some(t) => {
+                let f = 1.0 / (l.z * self.cutoff.tan());
+                let (u, v) = (0.5 + 0.5 * l.x * f, 0.5 + 0.5 * l.y * f);
+                t.lookup(u, 1.0 - v).map(|c| c * k)
+            }
+        }
+    }
+
+    /// Mitsuba's defaults: a 20 degree cutoff, the beam 3/4 of it.
+    pub const DEFAULT_CUTOFF_DEGREES: f32 = 20.0;
+    pub const DEFAULT_BEAM_SHARE: f32 = 0.75;
+}
+
+impl PointLight {
+    /// Power-like weight for the choice among lights (`radius`: the scene's bounding sphere).
+    fn weight(&self, radius: f32) -> f32 {
+        let lum = crate::spectrum::Spectrum::<3>(self.intensity)
+            .luminance()
+            .max(0.0);
+        match &self.shape {
+            // a spot weighs as the point light of its intensity: its cone's power alone
+            // would starve it beside an environment lighting the same surfaces
+            PointShape::Isotropic | PointShape::Spot(_) => 4.0 * std::f32::consts::PI * lum,
+            PointShape::Directional(_) => std::f32::consts::PI * radius * radius * lum,
+        }
+    }
 }
 
 /// What `Lights::choose` picked for next-event estimation.
@@ -247,13 +332,12 @@ impl Lights {
             self.p_area = 1.0;
             return Ok(());
         }
-        let lum = |c: [f32; 3]| crate::spectrum::Spectrum::<3>(c).luminance().max(0.0);
         let mut w = vec![self.dist.total() as f32];
+        let r = radius.max(1e-3);
         for p in &self.points {
-            w.push(4.0 * std::f32::consts::PI * lum(p.intensity));
+            w.push(p.weight(r));
         }
         if let Some(e) = &self.env {
-            let r = radius.max(1e-3);
             w.push(std::f32::consts::PI.powi(2) * r * r * e.mean_luminance);
         }
         let kinds = Distribution1D::new(&w);

@@ -77,10 +77,11 @@ pub fn render_strategies(
     max_length: u32,
     progress: &dyn Progress,
 ) -> Result<Vec<StrategyImage>, String> {
-    if job.integrator != IntegratorKind::Bdpt {
+    let kind = job.integrator_for(scene);
+    if kind != IntegratorKind::Bdpt {
         return Err(format!(
             "--bdpt-strategies: the strategy images are BDPT's; add --integrator bdpt (not {})",
-            crate::options::name(&job.integrator)
+            crate::options::name(&kind)
         ));
     }
     job.validate()?;
@@ -256,7 +257,7 @@ mod tests {
 
     fn job() -> RenderJob {
         let mut j = RenderJob::new("cornell");
-        j.integrator = IntegratorKind::Bdpt;
+        j.integrator = Some(IntegratorKind::Bdpt);
         j.res = Some((12, 10));
         j.spp = Some(4);
         j.max_depth = Some(3);
@@ -297,7 +298,7 @@ mod tests {
     fn refused_without_bdpt() {
         let scene = crate::scene::load("cornell").unwrap();
         let mut j = job();
-        j.integrator = IntegratorKind::Path;
+        j.integrator = Some(IntegratorKind::Path);
         let e = render_strategies(&scene, &j, 4, &Silent).unwrap_err();
         assert!(e.contains("--integrator bdpt"), "{e}");
     }

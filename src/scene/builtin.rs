@@ -86,6 +86,7 @@ fn room() -> Result<SceneDesc, String> {
         spp: None,
         max_depth: None,
         rr_min_depth: None,
+        integrator: None,
     };
     Ok(d)
 }
@@ -162,6 +163,7 @@ fn cornell_from(name: &str, obj: &str, mtl_text: &'static str) -> Result<SceneDe
         spp: None,
         max_depth: None,
         rr_min_depth: None,
+        integrator: None,
     };
     Ok(d)
 }
@@ -266,6 +268,7 @@ fn furnace_room(name: &str) -> SceneDesc {
         spp: None,
         max_depth: None,
         rr_min_depth: None,
+        integrator: None,
     };
     d
 }
@@ -367,6 +370,7 @@ fn caustic() -> SceneDesc {
         spp: None,
         max_depth: None,
         rr_min_depth: None,
+        integrator: None,
     };
     d
 }
@@ -520,6 +524,7 @@ fn rw_room() -> SceneDesc {
         spp: None,
         max_depth: None,
         rr_min_depth: None,
+        integrator: None,
     };
     d
 }

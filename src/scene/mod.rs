@@ -129,9 +129,27 @@ pub struct EnvironmentDesc {
 #[derive(Clone, Debug, PartialEq)]
 pub struct PointLightDesc {
     pub position: Vec3,
-    /// Radiant intensity (W/sr, linear RGB).
+    /// Radiant intensity (W/sr, linear RGB); a directional light's irradiance (W/m^2).
     pub intensity: [f32; 3],
+    pub shape: PointLightShape,
     pub source: Option<String>,
+}
+
+/// How a point light sends its light (see `light::PointShape`).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum PointLightShape {
+    #[default]
+    Isotropic,
+    /// Mitsuba's spot: axis +z of `to_world` (rotation and scale), angles in degrees, an
+    /// optional image projected over the cone.
+    Spot {
+        to_world: glam::Mat3,
+        cutoff: f32,
+        beam_width: f32,
+        texture: Option<PathBuf>,
+    },
+    /// Light travelling along this direction from infinitely far away.
+    Directional(Vec3),
 }
 
 impl MaterialDesc {
@@ -175,6 +193,8 @@ pub struct RenderDefaults {
     pub max_depth: Option<i32>,
     /// Reflections before Russian roulette starts (`--rr-min-depth`).
     pub rr_min_depth: Option<u32>,
+    /// The estimator the file asks for (`--integrator`).
+    pub integrator: Option<crate::integrator::IntegratorKind>,
 }
 
 /// A scene as plain data, before acceleration structures are built.
@@ -399,6 +419,7 @@ impl Scene {
                     Ok(crate::light::PointLight {
                         p: p.position,
                         intensity: p.intensity,
+                        shape: point_shape(&p.shape, p.source.as_deref())?,
                     })
                 } else {
                     Err(format!(
@@ -655,6 +676,50 @@ fn environment_light(e: &EnvironmentDesc) -> Result<crate::light::EnvLight, Stri
     })
 }
 
+/// A point light's shape for rendering: a spot's texture loaded, its frame inverted.
+fn point_shape(
+    shape: &PointLightShape,
+    source: Option<&str>,
+) -> Result<crate::light::PointShape, String> {
+    use crate::light::{PointShape, Spot};
+    let at = source.map(|s| format!("{s}: ")).unwrap_or_default();
+    Ok(match shape {
+        PointLightShape::Isotropic => PointShape::Isotropic,
+        PointLightShape::Directional(d) => {
+            let d = d.normalize_or_zero();
+            if d == Vec3::ZERO || !d.is_finite() {
+                return Err(format!("{at}directional light: its direction is zero"));
+            }
+            PointShape::Directional(d)
+        }
+        PointLightShape::Spot {
+            to_world,
+            cutoff,
+            beam_width,
+            texture,
+        } => {
+            let ok = |a: f32| a > 0.0 && a <= 90.0;
+            if !(ok(*cutoff) && ok(*beam_width)) || to_world.determinant().abs() < 1e-12 {
+                return Err(format!(
+                    "{at}spot light: cutoff_angle {cutoff} and beam_width {beam_width} must be in (0, 90] degrees, its to_world invertible"
+                ));
+            }
+            let texture = match texture {
+                Some(p) => Some(std::sync::Arc::new(
+                    Texture::load(p).map_err(|e| format!("{at}spot light: {e}"))?,
+                )),
+                None => None,
+            };
+            PointShape::Spot(Spot {
+                to_local: to_world.inverse(),
+                cutoff: cutoff.to_radians(),
+                beam_width: beam_width.min(*cutoff).to_radians(),
+                texture,
+            })
+        }
+    })
+}
+
 /// A camera on +z looking at the centre of the bounds (see `camera::framing_camera`).
 pub fn default_camera(b: &Bounds3) -> CameraDesc {
     camera::framing_camera(b)
@@ -663,9 +728,15 @@ pub fn default_camera(b: &Bounds3) -> CameraDesc {
 /// Load a scene named on the command line: a built-in name, an `.obj`, a `.toml` or a
 /// Mitsuba `.xml` file.
 pub fn load(spec: &str) -> Result<Scene, String> {
+    load_with(spec, &[])
+}
+
+/// [`load`] with Mitsuba's defines (`-D key=value`: each replaces the scene file's
+/// `<default>` of that name); only Mitsuba .xml scenes take them.
+pub fn load_with(spec: &str, defines: &[(String, String)]) -> Result<Scene, String> {
     let t0 = Instant::now();
     let (scene, hash) = crate::input::content_hash_of_reads(|| {
-        let desc = load_desc(spec)?;
+        let desc = load_desc_with(spec, defines)?;
         Scene::build(desc, t0.elapsed().as_secs_f64())
     });
     let mut scene = scene?;
@@ -677,6 +748,22 @@ pub fn load(spec: &str) -> Result<Scene, String> {
 
 /// Read a scene description without building it.
 pub fn load_desc(spec: &str) -> Result<SceneDesc, String> {
+    load_desc_with(spec, &[])
+}
+
+/// [`load_desc`] with defines (see [`load_with`]).
+pub fn load_desc_with(spec: &str, defines: &[(String, String)]) -> Result<SceneDesc, String> {
+    let is_xml = Path::new(spec)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    if let (Some((k, v)), false) = (defines.first(), is_xml) {
+        return Err(format!(
+            "-D {k}={v}: {spec}: only Mitsuba .xml scenes take defines"
+        ));
+    }
+    if is_xml {
+        return mitsuba::load_with(Path::new(spec), defines);
+    }
     if let Some(desc) = builtin::load(spec)? {
         return Ok(desc);
     }

@@ -482,6 +482,7 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
         desc.point_lights.push(super::PointLightDesc {
             position: Vec3::from(p.position),
             intensity: p.intensity,
+            shape: Default::default(),
             source: Some(format!("{p_at} point_lights[{i}]")),
         });
     }
@@ -511,6 +512,7 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
             spp: r.spp,
             max_depth: r.max_depth,
             rr_min_depth: None,
+            integrator: None,
         };
     }
     Ok(desc)

@@ -16,7 +16,7 @@ fn run_with(
 ) -> (DtfRun, Vec<[f32; 3]>) {
     let scene = crate::scene::load(scene_name).unwrap();
     let mut job = RenderJob::new(scene_name);
-    job.integrator = IntegratorKind::Bdpt;
+    job.integrator = Some(IntegratorKind::Bdpt);
     job.res = Some((res, res));
     job.seed = seed;
     f(&mut job.dtf);
@@ -126,7 +126,7 @@ fn rest_pass_splits_off_exactly_the_emission_seen_directly() {
     for scene_name in ["cornell", "caustic"] {
         let scene = crate::scene::load(scene_name).unwrap();
         let mut job = RenderJob::new(scene_name);
-        job.integrator = IntegratorKind::Bdpt;
+        job.integrator = Some(IntegratorKind::Bdpt);
         job.res = Some((20, 20));
         job.seed = 3;
         let set = job.settings(&scene);
@@ -194,7 +194,7 @@ fn dtf_over_bdpt_keeps_the_light_seen_directly() {
     assert!(mask.len() >= 4, "{} light pixels", mask.len());
     let scene = crate::scene::load("cornell").unwrap();
     let mut job = RenderJob::new("cornell");
-    job.integrator = IntegratorKind::Bdpt;
+    job.integrator = Some(IntegratorKind::Bdpt);
     job.res = Some((24, 24));
     job.seed = 8;
     let set = job.settings(&scene);
@@ -340,7 +340,7 @@ impl DtfPasses for SplitPasses<'_> {
 fn dtf_over_bdpt_split_into_parts_is_the_one_process_run() {
     let scene = crate::scene::load("caustic").unwrap();
     let mut job = RenderJob::new("caustic");
-    job.integrator = IntegratorKind::Bdpt;
+    job.integrator = Some(IntegratorKind::Bdpt);
     job.res = Some((16, 16));
     job.seed = 2;
     job.dtf.n = Some(4);
@@ -388,7 +388,7 @@ fn dtf_over_bdpt_split_into_parts_is_the_one_process_run() {
 fn light_pass_is_deterministic() {
     let scene = crate::scene::load("caustic").unwrap();
     let mut job = RenderJob::new("caustic");
-    job.integrator = IntegratorKind::Bdpt;
+    job.integrator = Some(IntegratorKind::Bdpt);
     job.res = Some((12, 10));
     let set = job.settings(&scene);
     let integ = Integrator::prepare(&scene, set.integrator, set.spectral.bands(), &Silent).unwrap();

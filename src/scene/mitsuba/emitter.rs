@@ -1,6 +1,10 @@
-//! Mitsuba's emitters: area (on a shape), point, constant and envmap.
+//! Mitsuba's emitters: area (on a shape), point, spot, directional, constant and envmap.
 
 use super::*;
+
+/// An emitter's radiance or intensity when the file gives none: Mitsuba's default 1.0
+/// (its `texture_d65`, which in RGB mode is white (1, 1, 1), not an equal-energy spectrum).
+pub(super) const UNIT_EMISSION: [f32; 3] = [1.0; 3];
 
 impl<'a> Loader<'a> {
     pub(super) fn emitter(&mut self, el: &'a El) -> R<()> {
@@ -16,10 +20,68 @@ impl<'a> Loader<'a> {
                     .unwrap_or_else(|| xf.transform_point3(Vec3::ZERO));
                 let intensity = self
                     .constant(el, "intensity", Use::Unbounded, "point emitter")?
-                    .unwrap_or_else(|| spectrum_to_rgb(&[360.0, 830.0], &[1.0, 1.0], false));
+                    .unwrap_or(UNIT_EMISSION);
                 self.desc.point_lights.push(PointLightDesc {
                     position: p,
                     intensity,
+                    shape: PointLightShape::Isotropic,
+                    source: Some(el.at.clone()),
+                });
+            }
+            "spot" => {
+                use crate::light::Spot;
+                let xf = self.transform(el, "to_world")?;
+                let intensity = self
+                    .constant(el, "intensity", Use::Unbounded, "spot emitter")?
+                    .unwrap_or(UNIT_EMISSION);
+                let cutoff = self
+                    .float(el, "cutoff_angle")?
+                    .unwrap_or(Spot::DEFAULT_CUTOFF_DEGREES);
+                let beam_width = self
+                    .float(el, "beam_width")?
+                    .unwrap_or(cutoff * Spot::DEFAULT_BEAM_SHARE);
+                let texture = match self.color(el, "texture", Use::Reflectance)? {
+                    None => None,
+                    Some(Color::Bitmap(p, _)) => Some(p),
+                    Some(Color::Rgb(c)) => {
+                        return Err(format!(
+                            "{}: spot emitter: texture {c:?}: a bitmap is expected (scale the intensity instead)",
+                            el.at
+                        ))
+                    }
+                };
+                self.desc.point_lights.push(PointLightDesc {
+                    position: xf.transform_point3(Vec3::ZERO),
+                    intensity,
+                    shape: PointLightShape::Spot {
+                        to_world: Mat3::from_mat4(xf),
+                        cutoff,
+                        beam_width,
+                        texture,
+                    },
+                    source: Some(el.at.clone()),
+                });
+            }
+            "directional" => {
+                let xf = self.transform(el, "to_world")?;
+                let irradiance = self
+                    .constant(el, "irradiance", Use::Unbounded, "directional emitter")?
+                    .unwrap_or(UNIT_EMISSION);
+                // Mitsuba: `direction` if given, else +z of to_world
+                let dir = match self.prop(el, "direction") {
+                    Some(p) => self.vec3_attr(p, "direction")?,
+                    None => xf.transform_vector3(Vec3::Z),
+                };
+                if !(dir.length_squared() > 0.0 && dir.is_finite()) {
+                    return Err(format!(
+                        "{}: directional emitter: the direction {dir} has no length",
+                        el.at
+                    ));
+                }
+                self.desc.point_lights.push(PointLightDesc {
+                    position: Vec3::ZERO,
+                    intensity: irradiance,
+                    shape: PointLightShape::Directional(dir.normalize()),
                     source: Some(el.at.clone()),
                 });
             }
@@ -28,7 +90,7 @@ impl<'a> Loader<'a> {
                 let (radiance, map) = if kind == "constant" {
                     let r = self
                         .constant(el, "radiance", Use::Unbounded, "constant emitter")?
-                        .unwrap_or_else(|| spectrum_to_rgb(&[360.0, 830.0], &[1.0, 1.0], false));
+                        .unwrap_or(UNIT_EMISSION);
                     (r, None)
                 } else {
                     let f = self

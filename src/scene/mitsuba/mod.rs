@@ -1,7 +1,10 @@
 //! Mitsuba 3 XML scenes (and Mitsuba 0.6 files, whose camelCase parameter names are
 //! upgraded as Mitsuba 3 does): the subset research scenes use, read into a `SceneDesc`.
 //!
-//! - `<scene version>`, `<default>` and `$name` substitution, `<include>`, `id` / `ref`;
+//! - `<scene version>`, `<default>` and `$name` substitution (a define, `-D key=value` or
+//!   `kalos.load(path, key=value)`, replaces the `<default>` of its name; one the file never
+//!   names is an error), `<include>`, `id` / `ref`, `<path>` search folders (every file
+//!   name is looked up in them, the one read last first, then beside the scene file);
 //! - shapes `obj`, `ply`, `rectangle`, `cube`, `sphere` (tessellated), `disk`, with
 //!   `to_world` (`matrix`, `translate`, `rotate`, `scale`, `lookat`, composed in order: each
 //!   step left-multiplies), `flip_normals`, `face_normals`, `flip_tex_coords`;
@@ -17,10 +20,17 @@
 //!   D65, emission as an equal-energy spectrum), `bitmap` textures with `filter_type`
 //!   (bilinear, nearest), `wrap_mode` (repeat, mirror, clamp) and `to_uv` (`map_kd` for
 //!   diffuse reflectances, a mask's opacity; the texture's mean, warned, in other slots);
-//! - emitters `area` (on a shape: `ke`), `point`, `constant`, `envmap`;
+//! - emitters `area` (on a shape: `ke`), `point`, `spot` (`cutoff_angle`, `beam_width`,
+//!   a bitmap `texture` projected over the cone), `directional` (`irradiance`, `direction`
+//!   or +z of `to_world`), `constant`, `envmap`; unset radiance and intensity are white
+//!   (1, 1, 1) as in Mitsuba's RGB mode;
 //! - the `perspective` sensor (`fov`, `fov_axis`, `focal_length`, `to_world`) into
 //!   `CameraDesc`, `hdrfilm` width and height, the integrator's `max_depth` and the
-//!   sampler's `sample_count` into `RenderDefaults`.
+//!   sampler's `sample_count` into `RenderDefaults`;
+//! - integrators: `path` and `bdpt` select kalos' estimator of that name (`--integrator`
+//!   overrides), `direct` is the path tracer at max_depth 2 (the same estimator: emitter and
+//!   BSDF sampling with MIS), `moment` and `aov` are read as their nested integrator,
+//!   `ptracer`, `volpath` and the others are rendered by the path tracer, and said so.
 //!
 //! Camera convention: Mitsuba's camera looks along +z of its `to_world`, +y is up and the
 //! image's x axis runs along -x; kalos' right vector is forward x up, the same direction
@@ -41,7 +51,8 @@ mod spectra;
 mod tests;
 
 use super::{
-    CameraDesc, EnvironmentDesc, FovAxis, MaterialDesc, PointLightDesc, SceneDesc, SurfaceModel,
+    CameraDesc, EnvironmentDesc, FovAxis, MaterialDesc, PointLightDesc, PointLightShape, SceneDesc,
+    SurfaceModel,
 };
 use crate::material::Distribution;
 use glam::{Mat3, Mat4, Vec2, Vec3};
@@ -50,11 +61,13 @@ use reader::*;
 pub use spectra::spectrum_to_rgb;
 use spectra::*;
 use std::cell::{Cell, RefCell};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 struct Loader<'a> {
     dir: PathBuf,
+    /// The `<path>` folders (see `reader::resolve`).
+    search: Vec<PathBuf>,
     desc: SceneDesc,
     ids: HashMap<&'a str, &'a El>,
     /// Material index of a BSDF element (by address: a shared `id` is one material).
@@ -88,11 +101,18 @@ impl<'a> Loader<'a> {
 
 /// Load a Mitsuba XML scene file.
 pub fn load(path: &Path) -> Result<SceneDesc, String> {
+    load_with(path, &[])
+}
+
+/// Load a Mitsuba XML scene file with parameters set as Mitsuba's `-D key=value` and
+/// `mi.load_file(path, key=value)` set them: each replaces the `<default>` of that name.
+pub fn load_with(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc, String> {
     let text = crate::input::read_text(path)?;
-    parse(
+    parse_with(
         &text,
         &path.display().to_string(),
         path.parent().unwrap_or(Path::new(".")),
+        defines,
     )
 }
 
@@ -115,25 +135,40 @@ fn one_line(s: String) -> String {
 
 /// Parse Mitsuba XML text; relative file names resolve against `dir`.
 pub fn parse(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
-    let mut d = parse_inner(text, file, dir).map_err(one_line)?;
+    parse_with(text, file, dir, &[])
+}
+
+/// [`parse`] with defines (see [`load_with`]).
+pub fn parse_with(
+    text: &str,
+    file: &str,
+    dir: &Path,
+    defines: &[(String, String)],
+) -> Result<SceneDesc, String> {
+    let mut d = parse_inner(text, file, dir, defines).map_err(one_line)?;
     d.warnings = d.warnings.into_iter().map(one_line).collect();
     Ok(d)
 }
 
-fn parse_inner(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> {
+fn parse_inner(
+    text: &str,
+    file: &str,
+    dir: &Path,
+    defines: &[(String, String)],
+) -> Result<SceneDesc, String> {
     let top_file = Path::new(file);
-    let mut reader = Reader {
-        defaults: HashMap::new(),
-        chain: vec![top_file
+    let mut reader = Reader::new(defines);
+    reader.chain.push(
+        top_file
             .canonicalize()
-            .unwrap_or_else(|_| top_file.to_path_buf())],
-        includes: 0,
-        bytes: text.len() as u64,
-        warnings: Vec::new(),
-    };
+            .unwrap_or_else(|_| top_file.to_path_buf()),
+    );
+    reader.bytes = text.len() as u64;
     let top = reader.read_text(text, file, dir)?;
+    reader.check_defines(defines, file)?;
     let mut ld = Loader {
         dir: dir.to_path_buf(),
+        search: std::mem::take(&mut reader.search),
         desc: SceneDesc {
             name: Path::new(file)
                 .file_stem()
@@ -196,7 +231,7 @@ fn parse_inner(text: &str, file: &str, dir: &Path) -> Result<SceneDesc, String> 
             "emitter" => ld.emitter(el)?,
             "sensor" => ld.sensor(el)?,
             "integrator" => ld.integrator(el)?,
-            "path" | "alias" => ld.warn(
+            "alias" => ld.warn(
                 &el.tag,
                 format!("{}: <{}> is not supported: ignored", el.at, el.tag),
             ),

@@ -325,7 +325,7 @@ impl<'a> Loader<'a> {
 
     /// Resolve a relative file name of the scene.
     pub(super) fn path(&self, name: &str) -> PathBuf {
-        crate::scene::mtl::normalise_path(&self.dir, name)
+        resolve(&self.search, &self.dir, name)
     }
 
     pub(super) fn mark_all(&self, el: &El) {

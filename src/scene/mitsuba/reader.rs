@@ -187,11 +187,61 @@ pub(super) struct Reader {
     pub(super) bytes: u64,
     /// Warnings found while reading (unknown version, ...).
     pub(super) warnings: Vec<String>,
+    /// `<path>` folders in the order read: a file name is looked up in the last first.
+    pub(super) search: Vec<PathBuf>,
+    /// Parameter names the files declare (`<default>`) or use (`$name`): a define must
+    /// name one of them.
+    pub(super) declared: HashSet<String>,
+}
+
+/// Where Mitsuba's file resolver finds `name`: in the `<path>` folders, the one read last
+/// first, then beside the scene file (`dir`); a name found nowhere is kept relative to `dir`
+/// (so that its error names that place).
+pub(super) fn resolve(search: &[PathBuf], dir: &Path, name: &str) -> PathBuf {
+    let here = crate::scene::mtl::normalise_path(dir, name);
+    if Path::new(name.trim()).is_absolute() {
+        return here;
+    }
+    search
+        .iter()
+        .rev()
+        .map(|d| crate::scene::mtl::normalise_path(d, name))
+        .find(|p| p.exists())
+        .unwrap_or(here)
 }
 
 impl Reader {
+    /// A reader whose `<default>`s are overridden by `defines` (Mitsuba's `-D key=value`).
+    pub(super) fn new(defines: &[(String, String)]) -> Reader {
+        Reader {
+            defaults: defines.iter().cloned().collect(),
+            chain: Vec::new(),
+            includes: 0,
+            bytes: 0,
+            warnings: Vec::new(),
+            search: Vec::new(),
+            declared: HashSet::new(),
+        }
+    }
+
+    /// Refuse a define that names no parameter of the scene (a typo would be ignored).
+    pub(super) fn check_defines(
+        &self,
+        defines: &[(String, String)],
+        file: &str,
+    ) -> Result<(), String> {
+        for (k, v) in defines {
+            if !self.declared.contains(k) {
+                return Err(format!(
+                    "-D {k}={v}: {file} has no <default name=\"{k}\"> and no ${k}"
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Substitute `$name` parameters.
-    pub(super) fn substitute(&self, v: &str, at: &str) -> Result<String, String> {
+    pub(super) fn substitute(&mut self, v: &str, at: &str) -> Result<String, String> {
         if !v.contains('$') {
             return Ok(v.to_string());
         }
@@ -204,6 +254,9 @@ impl Reader {
                 .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
                 .unwrap_or(after.len());
             let key = &after[..n];
+            if !key.is_empty() {
+                self.declared.insert(key.to_string());
+            }
             if key.is_empty() {
                 out.push('$');
             } else {
@@ -323,6 +376,7 @@ impl Reader {
                         at(&n)
                     ));
                 };
+                self.declared.insert(k.to_string());
                 self.defaults
                     .entry(k.to_string())
                     .or_insert_with(|| v.to_string());
@@ -332,13 +386,28 @@ impl Reader {
         for n in root.children().filter(|n| n.is_element()) {
             match n.tag_name().name() {
                 "default" => {}
+                "path" => {
+                    let here = at(&n);
+                    let value = n
+                        .attribute("value")
+                        .ok_or_else(|| format!("{here}: <path> needs a value attribute"))?;
+                    let value = self.substitute(value, &here)?;
+                    let p = crate::scene::mtl::normalise_path(dir, &value);
+                    if !p.is_dir() {
+                        return Err(format!(
+                            "{here}: <path value=\"{value}\">: {} is not a folder",
+                            p.display()
+                        ));
+                    }
+                    self.search.push(p);
+                }
                 "include" => {
                     let here = at(&n);
                     let name = n
                         .attribute("filename")
                         .ok_or_else(|| format!("{here}: <include> needs a filename attribute"))?;
                     let name = self.substitute(name, &here)?;
-                    let p = crate::scene::mtl::normalise_path(dir, &name);
+                    let p = resolve(&self.search, dir, &name);
                     out.extend(
                         self.include(&p, &format!("{here}: <include filename=\"{name}\">"))?,
                     );
@@ -350,7 +419,7 @@ impl Reader {
     }
 
     fn convert(
-        &self,
+        &mut self,
         n: roxmltree::Node,
         lines: &Lines,
         file: &str,

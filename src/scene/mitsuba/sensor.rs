@@ -35,6 +35,15 @@ impl<'a> Loader<'a> {
                     }
                     crate::film::check_resolution(w, h)
                         .map_err(|e| format!("{}: film: {e}", t.at))?;
+                    if !t.children.iter().any(|r| r.tag == "rfilter") {
+                        self.warn(
+                            "rfilter",
+                            format!(
+                                "{}: no <rfilter>: Mitsuba's default is a Gaussian reconstruction filter, kalos uses a box filter (the same mean, sharper edges)",
+                                t.at
+                            ),
+                        );
+                    }
                     for r in t.children.iter().filter(|r| r.tag == "rfilter") {
                         r.used.set(true);
                         if !known_plugin("rfilter", r.kind()) {
@@ -122,12 +131,11 @@ impl<'a> Loader<'a> {
                     .ok_or_else(|| {
                         format!("{}: focal_length \"{fl}\": expected e.g. 50mm", el.at)
                     })?;
-                let film = match axis.as_str() {
-                    "y" => 24.0f32,
-                    "diagonal" => 36.0f32.hypot(24.0),
-                    _ => 36.0,
-                };
-                ((2.0 * (film / (2.0 * mm)).atan()).to_degrees(), axis)
+                // Mitsuba's parse_fov: a 35 mm film's diagonal (36 x 24 mm) spread over
+                // this film's aspect ratio gives the horizontal extent (fov_axis is not read)
+                let aspect = w as f32 / h as f32;
+                let half_x = 18.0f32.hypot(12.0) / (1.0 + 1.0 / (aspect * aspect)).sqrt();
+                ((2.0 * (half_x / mm).atan()).to_degrees(), "x".to_string())
             }
         };
         if !(fov > 0.0 && fov < 180.0) {
@@ -171,14 +179,32 @@ impl<'a> Loader<'a> {
         if !known_plugin("integrator", kind) {
             return Err(format!("{}: unknown integrator plugin '{kind}'", el.at));
         }
+        use crate::integrator::IntegratorKind;
         match kind {
-            "path" | "volpath" | "volpathmis" | "prb" | "prbvolpath" | "bdpt" => {
-                if kind != "path" {
+            "path" | "volpath" | "volpathmis" | "prb" | "prbvolpath" | "bdpt" | "ptracer" => {
+                // the file's estimator, or kalos' nearest: the path tracer (the same
+                // image) for Mitsuba's particle tracer (kalos' BDPT, whose light tracing is
+                // the particle tracer's, takes area lights only) and for the volumetric
+                // and differentiable path tracers
+                let (kalos, said) = match kind {
+                    "path" => (IntegratorKind::Path, None),
+                    "bdpt" => (IntegratorKind::Bdpt, None),
+                    "ptracer" => (
+                        IntegratorKind::Path,
+                        Some("rendered with kalos' path tracer (the same image; its BDPT, whose light tracing is the particle tracer's, takes area lights only)"),
+                    ),
+                    _ => (
+                        IntegratorKind::Path,
+                        Some("rendered with kalos' path tracer (the same image without media)"),
+                    ),
+                };
+                if let Some(said) = said {
                     self.warn(
                         "integrator",
-                        format!("{}: integrator '{kind}': kalos renders the same image with its own estimator (see --integrator)", el.at),
+                        format!("{}: integrator '{kind}': {said} (see --integrator)", el.at),
                     );
                 }
+                self.desc.defaults.integrator = Some(kalos);
                 if let Some(d) = self.int(el, "max_depth")? {
                     if d < -1 || d == 0 {
                         return Err(format!(
@@ -204,27 +230,26 @@ impl<'a> Loader<'a> {
                 }
                 self.unused(el, &format!("integrator '{kind}'"));
             }
+            // direct light (emitter and BSDF sampling with MIS) is the path tracer's
+            // max_depth 2: the same estimator
             "direct" => {
                 self.mark_all(el);
                 self.desc.defaults.max_depth = Some(2);
-                self.warn(
-                    "integrator",
-                    format!(
-                        "{}: integrator 'direct': rendered as the path tracer with max_depth 2",
-                        el.at
-                    ),
-                );
+                self.desc.defaults.integrator = Some(IntegratorKind::Path);
             }
-            // Mitsuba's AOV integrator: the radiance is its nested integrator's
-            "aov" => {
+            // Mitsuba's AOV and moment integrators: the radiance is their nested
+            // integrator's (moment adds the second moment, which kalos' film keeps anyway)
+            "aov" | "moment" => {
                 self.mark_all(el);
-                self.warn(
-                    "integrator aov",
-                    format!(
-                        "{}: integrator 'aov': kalos renders the radiance of the nested integrator, without the AOVs (see --aovs)",
-                        el.at
-                    ),
-                );
+                if kind == "aov" {
+                    self.warn(
+                        "integrator aov",
+                        format!(
+                            "{}: integrator 'aov': kalos renders the radiance of the nested integrator, without the AOVs (see --aovs)",
+                            el.at
+                        ),
+                    );
+                }
                 for c in el.children.iter().filter(|c| c.tag == "integrator") {
                     self.integrator(c)?;
                 }
@@ -233,7 +258,7 @@ impl<'a> Loader<'a> {
                 self.mark_all(el);
                 self.warn(
                     "integrator",
-                    format!("{}: unsupported integrator '{k}': kalos renders radiance with its path tracer", el.at),
+                    format!("{}: integrator '{k}' is not in kalos: rendered with its path tracer (see --integrator)", el.at),
                 );
             }
         }
