@@ -32,10 +32,8 @@ const VARIANCE_FLOOR: f64 = 1e-4;
 
 /// Scenes that do not pass yet, with the reason.
 const KNOWN_FAILURES: &[(&str, &str)] = &[
-    ("test_arealight_path", "the masked leaves of the sphere grid render as opaque squares"),
     ("test_bumpmap_path", "bumpmap: the nested BSDF is shaded without the bumps"),
-    ("test_constant_path", "the masked leaves of the sphere grid render as opaque squares"),
-    ("test_envmap_path", "the masked leaves of the sphere grid render as opaque squares"),
+    ("test_constant_path", "0.6% of pixel-channels off since the masks render; not yet measured (Mitsuba's default Gaussian film filter, rendered as a box, is a candidate)"),
     (
         "test_normalmap_identity_roughconductor_path",
         "normalmap and the anisotropic rough conductor (alpha_u 0.25, alpha_v 0.05) disagree",
@@ -45,14 +43,13 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
         "test_normalmap_roughconductor_path",
         "normalmap and the anisotropic rough conductor (alpha_u 0.25, alpha_v 0.05) disagree",
     ),
-    ("test_pointlight_path", "the masked leaves of the sphere grid render as opaque squares"),
     (
         "test_roughplastic_linear_path",
-        "rough plastic's diffuse term: Mitsuba's internal-reflection factor applied twice",
+        "about 0.5% of pixel-channels off since plastic's base is scaled once; not yet measured (the box filter in place of Mitsuba's default Gaussian is a candidate)",
     ),
     (
         "test_roughplastic_nonlinear_path",
-        "rough plastic's diffuse term: Mitsuba's internal-reflection factor applied twice",
+        "about 0.5% of pixel-channels off since plastic's base is scaled once; not yet measured (the box filter in place of Mitsuba's default Gaussian is a candidate)",
     ),
     (
         "test_textured_roughconductor_path",
@@ -74,7 +71,7 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     ("test_projector_textured_direct", "projector emitter not read"),
     (
         "test_texture_interp_direct",
-        "bitmap to_uv, wrap_mode and filter_type not applied; Mitsuba's default Gaussian film filter rendered as a box",
+        "Mitsuba's default Gaussian film filter rendered as a box (to_uv, wrap_mode and filter_type are read)",
     ),
     (
         "test_various_emitters_ptracer",
