@@ -142,49 +142,19 @@ fn bdpt_efficiency() {
             "{name} {w}x{w}: bdpt {spp_b} spp {ta:.2}s var {va:.3e}; path {spp_p} spp {tb:.2}s var {vb:.3e}; efficiency bdpt/path {:.2}",
             (vb * tb) / (va * ta)
         );
-        for (tag, x, ww) in [("bdpt", &a, w), ("path", &b, w)] {
-            let data = x
-                .mean
-                .iter()
-                .map(|m| [m[0] as f32, m[1] as f32, m[2] as f32])
-                .collect();
-            let img = kalos::image_io::RgbImage::new(ww, ww, data);
-            kalos::image_io::write_image(
-                std::path::Path::new(&format!("/tmp/{name}-{tag}.png")),
-                &img,
-                0.0,
-                &[],
-            )
-            .unwrap();
-        }
+        write_png(&a, &format!("/tmp/{name}-bdpt.png"));
+        write_png(&b, &format!("/tmp/{name}-path.png"));
     }
     let scene = scene::load("caustic").unwrap();
     let a = render_bdpt::<3>(&scene, 128, 128, 16, 1, &set, BdptOptions::default());
-    let data = a
-        .mean
-        .iter()
-        .map(|m| [m[0] as f32, m[1] as f32, m[2] as f32])
-        .collect();
-    let img = kalos::image_io::RgbImage::new(128, 128, data);
-    kalos::image_io::write_image(
-        std::path::Path::new("/tmp/caustic-bdpt-128.png"),
-        &img,
-        0.0,
-        &[],
-    )
-    .unwrap();
+    write_png(&a, "/tmp/caustic-bdpt-128.png");
     let b = render_path::<3>(&scene, 128, 128, 64, 2, &set);
-    let data = b
-        .mean
-        .iter()
-        .map(|m| [m[0] as f32, m[1] as f32, m[2] as f32])
-        .collect();
-    let img = kalos::image_io::RgbImage::new(128, 128, data);
-    kalos::image_io::write_image(
-        std::path::Path::new("/tmp/caustic-path-128.png"),
-        &img,
-        0.0,
-        &[],
-    )
-    .unwrap();
+    write_png(&b, "/tmp/caustic-path-128.png");
+}
+
+/// A pass image's means as a PNG.
+fn write_png(x: &Img, path: &str) {
+    let data = x.mean.iter().map(|m| m.map(|c| c as f32)).collect();
+    let img = kalos::image_io::RgbImage::new(x.w, x.h, data);
+    kalos::image_io::write_image(std::path::Path::new(path), &img, 0.0, &[]).unwrap();
 }

@@ -300,7 +300,9 @@ fn camera_follows_mitsuba_conventions() {
     assert!(near(axis("larger"), [0.5, 1.0]));
     let d = 5f32.sqrt();
     assert!(near(axis("diagonal"), [1.0 / d, 2.0 / d]));
-    let e = scene(r#"<sensor type="perspective"><string name="fov_axis" value="z"/></sensor>"#);
+    let e = scene(
+        r#"<sensor type="perspective"><float name="fov" value="45"/><string name="fov_axis" value="z"/></sensor>"#,
+    );
     assert!(e.unwrap_err().contains("fov_axis \"z\""));
 }
 
