@@ -42,14 +42,7 @@ fn job_command() -> clap::Command {
 /// (`invalid value 'abc' for '--res <RES>': "abc" is not WxH`).
 fn parse_job(scene: &str, argv: &[String]) -> Result<RenderJob, String> {
     use clap::FromArgMatches;
-    let first_line = |e: clap::Error| {
-        let text = e.render().to_string();
-        text.lines()
-            .next()
-            .unwrap_or_default()
-            .trim_start_matches("error: ")
-            .to_string()
-    };
+    let first_line = |e: clap::Error| kalos::cli::one_line(&e.render().to_string());
     let m = job_command()
         .try_get_matches_from(argv)
         .map_err(first_line)?;
