@@ -2,10 +2,8 @@
 //! precision, images that declare billions of bytes, DTF options without end, an
 //! interrupt while a scene loads), and messages that named the wrong thing.
 
-use super::{
-    assert_experiment_refused, assert_one_line_error, experiment_text, kalos, kalos_within, render,
-    temp_dir, write, ONE_CONFIG,
-};
+use super::experiments::{assert_experiment_refused, experiment_text, ONE_CONFIG};
+use super::{assert_one_line_error, kalos, kalos_within, render, temp_dir, write};
 use std::process::Command;
 
 const QUAD: &str = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n";
