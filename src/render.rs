@@ -29,8 +29,13 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
-    /// The same number of samples in every pixel.
+    /// Chosen for the scene and budget: a short pilot measures each estimator's
+    /// efficiency, then dependent-tests driven filtering over the better one, or plain
+    /// rendering where the budget is too small for it (or the output is a film file).
+    /// Naming an estimator (here, in the scene file or in Python) renders plainly with it.
     #[default]
+    Auto,
+    /// The same number of samples in every pixel.
     Plain,
     /// Dependent-tests driven filtering (Csonka et al.).
     Dtf,
@@ -75,8 +80,9 @@ pub struct RenderJob {
     /// Camera "ox,oy,oz,tx,ty,tz,ux,uy,uz,fov" (overrides the scene's).
     #[arg(long, allow_hyphen_values = true, value_parser = CameraDesc::parse)]
     pub camera: Option<CameraDesc>,
-    /// Rendering method: plain (same spp everywhere) or dtf (dependent-tests driven filtering).
-    #[arg(long, value_enum, default_value_t = Method::Plain)]
+    /// Rendering method: auto (chosen from a pilot), plain (same spp everywhere), dtf
+    /// (dependent-tests driven filtering) or rw (Rushmeier and Ward).
+    #[arg(long, value_enum, default_value_t = Method::Auto)]
     pub method: Method,
     /// Estimator (default: the scene file's, e.g. a Mitsuba `<integrator type="bdpt">`,
     /// else path).
@@ -110,8 +116,8 @@ pub struct RenderJob {
     /// Spectral bands: rgb | 8 | 16.
     #[arg(long, value_enum, default_value_t = SpectralMode::Rgb)]
     pub spectral: SpectralMode,
-    /// Sampler: random | sobol (Owen-scrambled).
-    #[arg(long, value_enum, default_value_t = SamplerKind::Random)]
+    /// Sampler: sobol (Owen-scrambled) | random.
+    #[arg(long, value_enum, default_value_t = SamplerKind::default())]
     pub sampler: SamplerKind,
     /// All pixels use the same random numbers per sample index (dependent tests).
     #[arg(long)]
@@ -190,7 +196,7 @@ impl RenderJob {
                         self.roulette
                             .min_depth
                             .or(scene.defaults.rr_min_depth)
-                            .unwrap_or(0),
+                            .unwrap_or(crate::integrator::rr::DEFAULT_MIN_DEPTH),
                     ),
                     ..self.roulette
                 },
@@ -270,6 +276,9 @@ pub struct RenderStats {
     pub bsdf_select: crate::integrator::BsdfSelect,
     pub seed: u64,
     pub method: Method,
+    /// What `--method auto` chose and why, in one line.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub method_choice: Option<String>,
     pub interrupted: bool,
     /// Instruction set of the BVH traversal (`accel::Isa`: sse2, avx2).
     pub simd: &'static str,
@@ -369,6 +378,80 @@ pub fn render(job: &RenderJob, progress: &dyn Progress) -> Result<Rendered, Stri
     Ok(r)
 }
 
+/// Least samples per pixel a budget must allow for `--method auto` to choose DTF (its
+/// dependent phase takes n = 8 of them at 16: `DtfParams::n_for`).
+pub const AUTO_DTF_MIN_SPP: f64 = 16.0;
+
+/// The relative standard error below which `--method auto`'s DTF keeps a pixel's own mean
+/// (`DtfParams::keep_converged`): well under the 5% a perceptual error counts, so a kept
+/// pixel is rarely off by that much.
+pub const AUTO_KEEP_CONVERGED: f32 = 0.02;
+
+/// `--method auto` made concrete: the job to render (its method and estimator named) and
+/// the line that says what was chosen and why; a job that names its method is returned as
+/// it is, with no line. The estimator comes from the pilot (`pipeline::auto`) unless the
+/// job or the scene file names one; DTF is chosen over it where the budget allows
+/// `AUTO_DTF_MIN_SPP` samples per pixel, plain rendering elsewhere.
+pub fn choose_method(
+    scene: &Scene,
+    job: &RenderJob,
+    set: &RenderSettings,
+    progress: &dyn Progress,
+) -> Result<(RenderJob, Option<String>), String> {
+    if job.method != Method::Auto {
+        return Ok((job.clone(), None));
+    }
+    let mut j = job.clone();
+    j.method = Method::Plain;
+    let named = if job.integrator.is_some() {
+        Some("--integrator names the estimator")
+    } else if scene.defaults.integrator.is_some() {
+        Some("the scene file names its integrator")
+    } else if job.gather != Gather::Off {
+        Some("--gather names the path tracer's gather")
+    } else if job.post_filter.is_some() {
+        Some("--filter filters a plain render")
+    } else if job.first_sample != 0 {
+        Some("--first-sample renders a shard of a plain render")
+    } else if scene.lights.is_empty() {
+        Some("the scene has no emitter")
+    } else {
+        None
+    };
+    if let Some(why) = named {
+        let kind = name(&job.integrator_for(scene));
+        return Ok((j, Some(format!("plain {kind}: {why}"))));
+    }
+    // (a candidate that cannot render with the job's other options is left out: BDPT
+    // without a roulette or a depth; the path tracer's error, if it has one, is the job's)
+    let mut pilots = vec![pipeline::auto::pilot(scene, set, IntegratorKind::Path)?];
+    if let Ok(p) = pipeline::auto::pilot(scene, set, IntegratorKind::Bdpt) {
+        pilots.push(p);
+    }
+    let (kind, why) = pipeline::auto::choose(&pilots);
+    let chosen = pilots.iter().find(|p| p.kind == kind).expect("a candidate");
+    let pilot_seconds: f64 = pilots.iter().map(|p| p.seconds).sum();
+    let spp = match (job.time, job.spp) {
+        (Some(t), _) => (t - pilot_seconds).max(0.0) / chosen.seconds_per_spp.max(1e-12),
+        (None, Some(n)) => n as f64,
+        (None, None) => scene.defaults.spp.unwrap_or(DEFAULT_SPP) as f64,
+    };
+    j.integrator = Some(kind);
+    let method = if spp >= AUTO_DTF_MIN_SPP {
+        j.method = Method::Dtf;
+        j.dtf.keep_converged = j.dtf.keep_converged.or(Some(AUTO_KEEP_CONVERGED));
+        format!("dtf over {}", name(&kind))
+    } else {
+        format!(
+            "plain {} (about {spp:.0} spp fit the budget; dtf needs {AUTO_DTF_MIN_SPP})",
+            name(&kind)
+        )
+    };
+    let line = format!("{method}; {why}");
+    progress.message(&format!("method: {line}"));
+    Ok((j, Some(line)))
+}
+
 /// Render an already loaded scene as the job says (the job's `scene` only names it).
 pub fn render_scene(
     scene: &Scene,
@@ -378,6 +461,13 @@ pub fn render_scene(
     job.validate()?;
     let set = job.settings(scene);
     crate::film::check_resolution(set.width, set.height)?;
+    let (pool, thread_warning) = thread_pool(job.threads)?;
+    let mut warnings: Vec<String> = thread_warning.into_iter().collect();
+    // (the pilot of `--method auto` is part of the preprocess: `--time` counts it)
+    let t_prep = std::time::Instant::now();
+    let (job, choice) = pool.install(|| choose_method(scene, job, &set, progress))?;
+    let job = &job;
+    let set = job.settings(scene);
     // DTF's spp budget is the average over both phases: phase 1's n must fit in it
     // (checked before any work, with the scene's default spp known)
     if let (Method::Dtf, None) = (job.method, job.time) {
@@ -393,9 +483,6 @@ pub fn render_scene(
             }
         }
     }
-    let (pool, thread_warning) = thread_pool(job.threads)?;
-    let mut warnings: Vec<String> = thread_warning.into_iter().collect();
-    let t_prep = std::time::Instant::now();
     // Say what a large render will cost before it starts.
     let pixels = set.width as u64 * set.height as u64;
     let planned = match (job.method, job.time, job.spp) {
@@ -470,7 +557,10 @@ pub fn render_scene(
             };
             let spp = (film.total_samples() as f64 / (set.width as f64 * set.height as f64)).round()
                 as u32;
-            let image = run.out.combined.clone();
+            let mut image = run.out.combined.clone();
+            if let (Some(tau), None) = (params.keep_converged, &run.direct) {
+                crate::filter::dtf::keep_converged(&mut image, &run.independent, tau as f64);
+            }
             (
                 film,
                 image,
@@ -507,7 +597,8 @@ pub fn render_scene(
                 None,
             )
         }
-        Method::Plain => {
+        // (`choose_method` has made auto concrete)
+        Method::Plain | Method::Auto => {
             let budget = match (time_left, job.spp) {
                 (Some(t), _) => Budget::Time(t),
                 (None, Some(n)) => Budget::Spp(n),
@@ -592,6 +683,7 @@ pub fn render_scene(
         bsdf_select: job.roulette.select,
         seed: job.seed,
         method: job.method,
+        method_choice: choice,
         interrupted,
         simd: scene.bvh.isa().name(),
         mean_rgb: image.mean(),
@@ -619,15 +711,15 @@ mod tests {
     #[test]
     fn defaults_are_the_documented_ones_everywhere() {
         let j = RenderJob::default();
-        assert_eq!(j.method, Method::Plain);
+        assert_eq!(j.method, Method::Auto);
         assert_eq!(j.integrator, None);
         assert_eq!(j.spectral, SpectralMode::Rgb);
-        assert_eq!(j.sampler, SamplerKind::Random);
+        assert_eq!(j.sampler, SamplerKind::Sobol);
         assert_eq!(
             (j.seed, j.first_sample, j.spp, j.time, j.res),
             (0, 0, None, None, None)
         );
-        assert_eq!(j.roulette.mode, RrMode::Classic);
+        assert_eq!(j.roulette.mode, RrMode::Spectral);
         assert_eq!(j.roulette.weight, RrWeight::Luminance);
         assert_eq!(j.roulette.select, BsdfSelect::Mixture);
         assert_eq!(j.roulette.min_depth, None);

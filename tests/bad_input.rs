@@ -629,6 +629,8 @@ fn an_interrupted_render_writes_what_it_has() {
         .args([
             "render",
             "cornell",
+            "--method",
+            "plain",
             "--res",
             "32x32",
             "--spp",

@@ -239,3 +239,27 @@ fn dtf_over_bdpt_with_light_paths_is_bit_identical_for_any_thread_count() {
         "DTF over BDPT: images differ with thread count"
     );
 }
+
+/// A render with no method named: the pilot chooses by ray counts, so the same seed gives
+/// the same choice, the same line in the statistics and the same image on any thread count.
+#[test]
+fn the_automatic_choice_is_the_same_on_any_thread_count() {
+    let scene = kalos::scene::load("cornell").unwrap();
+    let go = |threads: usize| {
+        let mut job = kalos::render::RenderJob::new("cornell");
+        job.res = Some((24, 20));
+        job.spp = Some(24);
+        job.threads = Some(threads);
+        let r = kalos::render::render_scene(&scene, &job, &kalos::pipeline::Silent).unwrap();
+        let stats = serde_json::to_value(&r.stats).unwrap();
+        (r.image.data, stats["method"].clone(), stats["method_choice"].clone())
+    };
+    let (one, three) = (go(1), go(3));
+    assert_eq!(one.1, "dtf");
+    assert!(
+        one.2.as_str().is_some_and(|s| s.starts_with("dtf over path; path: ")),
+        "{:?}",
+        one.2
+    );
+    assert!(one == three, "the automatic choice differs with thread count");
+}

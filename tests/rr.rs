@@ -147,14 +147,15 @@ fn the_comparison_sees_a_small_bias() {
 }
 
 #[test]
-fn default_roulette_is_classic_with_the_mixture() {
+fn default_roulette_is_spectral_with_the_mixture() {
     // The defaults a render gets without --rr / --rr-weight / --bsdf-select.
     let r = kalos::integrator::Roulette::default();
-    assert_eq!(r.mode, RrMode::Classic);
+    assert_eq!(r.mode, RrMode::Spectral);
     assert_eq!(r.select, BsdfSelect::Mixture);
     assert_eq!(r.weight, kalos::integrator::RrWeight::Luminance);
     assert_eq!(
         r.min_depth, None,
-        "the scene decides (0 unless a Mitsuba scene says otherwise)"
+        "the scene decides (DEFAULT_MIN_DEPTH unless a Mitsuba scene says otherwise)"
     );
+    assert_eq!(kalos::integrator::rr::DEFAULT_MIN_DEPTH, 2);
 }

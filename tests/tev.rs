@@ -61,7 +61,7 @@ fn temp(name: &str) -> std::path::PathBuf {
 fn render_to_tev(res: &str, spp: &str, port: u16, out: &std::path::Path) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_kalos"))
         .args([
-            "render", "cornell", "--res", res, "--spp", spp, "-q", "--tev",
+            "render", "cornell", "--method", "plain", "--res", res, "--spp", spp, "-q", "--tev",
         ])
         .arg(format!("127.0.0.1:{port}"))
         .arg("-o")

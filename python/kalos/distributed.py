@@ -98,6 +98,8 @@ def render(
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise ImportError("kalos.distributed needs Dask: pip install dask distributed") from e
     method = _distributable(options)
+    # a distributed render is plain or dtf as asked, never chosen per part
+    options["method"] = method
     if client is None:
         client = get_client()
     sc = scene if isinstance(scene, Scene) else load(scene)

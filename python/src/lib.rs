@@ -413,7 +413,8 @@ fn render(
     let (width, height, image, variance, count) = film_arrays(py, &r.film, &r.image);
     let stats = serde_json::to_string(&r.stats).unwrap_or_default();
     let job_json = serde_json::to_string(&job).unwrap_or_default();
-    let film = if job.method == kalos::render::Method::Plain {
+    // (the method rendered: `--method auto` may have chosen plain)
+    let film = if r.stats.method == kalos::render::Method::Plain {
         let f = r.film_file(&job);
         Some(Py::new(py, NativeFilm { f })?)
     } else {

@@ -64,6 +64,12 @@ impl RenderArgs {
     pub fn job(&self) -> RenderJob {
         let mut j = self.job.clone();
         j.scene = self.scene.clone();
+        // a film file, BDPT's strategy images and a render on Dask are plain renders'
+        if j.method == Method::Auto
+            && (is_film_path(&self.output) || self.bdpt_strategies || self.dask.is_some())
+        {
+            j.method = Method::Plain;
+        }
         j
     }
 }
@@ -81,7 +87,7 @@ pub fn check_outputs(a: &RenderArgs) -> Result<Vec<String>, String> {
     let mut warnings = Vec::new();
     if !is_film_path(&a.output) {
         crate::image_io::format_of(&a.output).map_err(|e| format!("-o/--output: {e}"))?;
-    } else if a.job.method != Method::Plain {
+    } else if !matches!(a.job.method, Method::Plain | Method::Auto) {
         return Err(format!(
             "-o/--output: a .kfilm film file holds a plain render's samples; --method {} writes images only",
             crate::options::name(&a.job.method)
@@ -181,7 +187,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     install_interrupt_handler();
     let progress = CliProgress::new(a.quiet);
     // DTF's phases do not stop part-way: an interrupt ends the process
-    let progress = if job.method == Method::Dtf {
+    let progress = if matches!(job.method, Method::Dtf | Method::Auto) {
         progress.not_stoppable()
     } else {
         progress

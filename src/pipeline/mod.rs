@@ -3,6 +3,7 @@
 //! of dependent-tests driven filtering on top of the same passes, so it works with any
 //! estimator. `progress` is the small trait they report to.
 
+pub mod auto;
 pub mod dtf;
 pub mod render;
 pub mod rw;

@@ -137,5 +137,31 @@ pub fn combine(cd: [f64; 3], n: u32, ci: [f64; 3], big_n: u32) -> [f64; 3] {
     ]
 }
 
+/// Pixels whose own phase-2 mean C_i[p] has converged keep it: where its relative standard
+/// error sqrt(sum_c Var C_i[p]_c) / ||C_i[p]|| is below `tau`, filtering could only add
+/// bias (a region's neighbours differ from the pixel by more than its own noise). Returns
+/// how many pixels kept their own mean. As the budget grows every pixel passes, so the
+/// image tends to the unfiltered, unbiased mean.
+pub fn keep_converged(
+    image: &mut crate::image_io::RgbImage,
+    independent: &crate::film::Film,
+    tau: f64,
+) -> usize {
+    let mut kept = 0;
+    for (i, px) in image.data.iter_mut().enumerate() {
+        let c = film_value(independent, i);
+        let norm = color_norm(c);
+        let se = film_variance_of_value(independent, i)
+            .iter()
+            .sum::<f64>()
+            .sqrt();
+        if norm > 0.0 && se < tau * norm {
+            *px = c.map(|v| v as f32);
+            kept += 1;
+        }
+    }
+    kept
+}
+
 #[cfg(test)]
 mod tests;

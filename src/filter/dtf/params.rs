@@ -190,6 +190,11 @@ pub struct DtfParams {
     /// kept a 0.8% error and the RMSE stalled (0.0086 at 0.03, 0.0082 at 0.01).
     #[arg(long = "dtf-rel-floor", default_value_t = 0.1)]
     pub relative_sigma_floor: f32,
+    /// DTF: pixels whose own phase-2 mean has a relative standard error below this keep it
+    /// instead of the filtered value (off unless given; the automatic method sets
+    /// `AUTO_KEEP_CONVERGED`): at large budgets filtering only adds bias there.
+    #[arg(long = "dtf-keep-converged")]
+    pub keep_converged: Option<f32>,
     /// DTF budget mode: clip the allocation weights at this multiple of their median (0 =
     /// no clipping).
     #[arg(long = "dtf-max-ratio", default_value_t = 16.0)]
@@ -301,6 +306,11 @@ impl DtfParams {
 
     /// A clear error for parameters the algorithm cannot use.
     pub fn validate(&self) -> Result<(), String> {
+        if let Some(t) = self.keep_converged.filter(|t| !(*t > 0.0 && *t < 1.0)) {
+            return Err(format!(
+                "--dtf-keep-converged {t}: a relative standard error between 0 and 1 (e.g. 0.02)"
+            ));
+        }
         if let Some(n) = self.n.filter(|&n| n < 2) {
             return Err(format!(
                 "--dtf-n {n}: the dependent phase needs at least 2 samples per pixel to estimate sigma"

@@ -30,7 +30,11 @@ fn wo_at(deg: f32) -> Vec3 {
 
 #[test]
 fn classic_uses_albedo_luminance() {
-    let r = Roulette::default();
+    let r = Roulette {
+        mode: RrMode::Classic,
+        min_depth: Some(0),
+        ..Roulette::default()
+    };
     let one = Spectrum::<3>::ONE;
     let a = Spectrum::<3>([0.5, 0.5, 0.5]);
     assert!((r.continuation(0, &one, &a) - 0.5).abs() < 1e-6);
