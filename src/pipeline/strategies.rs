@@ -4,21 +4,21 @@
 //! adds to the render) and unweighted (C*_{s,t}: an estimate of the whole light of that
 //! path length, by that strategy alone).
 //!
-//! A pass over the pixels calls `bdpt::sample_pixel_with` with a callback. Camera-side
-//! strategies (t >= 2) add to their own pixel, light tracing (t = 1) to the pixel its
-//! splat lands in; every image is the sum divided by the samples per pixel (one light
+//! A pass over the pixels calls `Integrator::sample` with a sink that reads the strategies
+//! (`film::Sink::strategy`). Camera-side strategies (t >= 2) add to their own pixel, light
+//! tracing (t = 1) to the pixel its splat lands in; every image is the sum divided by the samples per pixel (one light
 //! subpath per camera sample, as in the render). Rows run in parallel, each keeping its own
 //! sums and its list of splats; rows are reduced in row order, so the images are the same
 //! bits for any thread count. The random streams are the render's (stream 0, sample indices
 //! `first..first + spp`), so the weighted images of every path length sum to the render.
 
-use crate::integrator::bdpt::{self, BdptOptions, StrategySample};
-use crate::integrator::{Counters, IntegratorKind};
+use crate::film::{raster_pixel, Sink, StrategySample};
+use crate::integrator::{CameraSample, Counters, Integrator, IntegratorKind, SampleCtx};
+use crate::math::Vec2;
 use crate::progress::Progress;
 use crate::render::RenderJob;
-use crate::sampling::SampleStream;
 use crate::scene::{Camera, Scene};
-use crate::spectrum::SpectralMode;
+use crate::spectrum::per_band;
 use rayon::prelude::*;
 
 /// The default bound on the path length (segments, Mitsuba's depth) of the images.
@@ -94,8 +94,9 @@ pub fn render_strategies(
             return Err("--bdpt-strategies: give --spp (the strategy images are a fixed number of samples, not --time)".into())
         }
     };
-    // Checks the integrator settings as the render does (e.g. --rr off with no depth).
-    crate::integrator::Integrator::prepare(
+    // The render's estimator (its settings checked as the render does, e.g. --rr off
+    // with no depth): BDPT with every strategy, one light subpath per camera sample.
+    let integrator = Integrator::prepare(
         scene,
         set.integrator,
         set.spectral.bands(),
@@ -106,15 +107,11 @@ pub fn render_strategies(
         _ => max_length,
     };
     let (pool, _) = crate::render::thread_pool(job.threads)?;
-    let opts = BdptOptions {
-        heuristic: set.integrator.mis,
-        ..Default::default()
-    };
     let list = strategy_list(max_len);
     let args = Args {
         scene,
         set: &set,
-        opts: &opts,
+        integrator: &integrator,
         first: job.first_sample,
         spp,
         max_len,
@@ -122,11 +119,7 @@ pub fn render_strategies(
         progress,
     };
     progress.begin("samples", set.width as u64 * set.height as u64 * spp as u64);
-    let sums = pool.install(|| match set.spectral {
-        SpectralMode::Rgb => pass::<3>(&args),
-        SpectralMode::Bands8 => pass::<8>(&args),
-        SpectralMode::Bands16 => pass::<16>(&args),
-    });
+    let sums = pool.install(|| per_band!(set.spectral, pass(&args)));
     progress.finish();
     if progress.cancelled() {
         return Err("--bdpt-strategies: interrupted, no strategy images written".into());
@@ -153,7 +146,7 @@ pub fn render_strategies(
 struct Args<'a> {
     scene: &'a Scene,
     set: &'a crate::pipeline::RenderSettings,
-    opts: &'a BdptOptions,
+    integrator: &'a Integrator,
     first: u64,
     spp: u32,
     max_len: u32,
@@ -164,64 +157,82 @@ struct Args<'a> {
 /// Per pixel, per strategy: [weighted, unweighted] RGB sums.
 type Sums = Vec<[[f64; 3]; 2]>;
 
-/// A row's output: each pixel's own sums, and its splats (pixel, strategy slot, sample).
-type RowOut = (Vec<Sums>, Vec<(usize, usize, StrategySample)>);
+/// A row's sink: each pixel's own sums (camera-side strategies), and the light-tracing
+/// strategies' contributions (pixel, strategy slot, sample), added after all rows.
+struct RowStrategies {
+    width: u32,
+    height: u32,
+    start: u32,
+    max_len: u32,
+    own: Vec<Sums>,
+    splats: Vec<(usize, usize, StrategySample)>,
+}
+
+impl Sink for RowStrategies {
+    fn wants_strategies(&self) -> bool {
+        true
+    }
+    fn sample(&mut self, _: u32, _: u64, _: [f32; 3], _: [f32; 3]) {}
+    fn splat(&mut self, _: u64, _: Vec2, _: [f32; 3]) {}
+    fn strategy(&mut self, pixel: u32, ss: &StrategySample) {
+        let Some(j) = slot(ss.s, ss.t, self.max_len) else {
+            return;
+        };
+        if ss.t == 1 {
+            if let Some(p) = raster_pixel(ss.raster, self.width, self.height) {
+                self.splats.push((p as usize, j, *ss));
+            }
+        } else {
+            add(&mut self.own[(pixel - self.start) as usize][j], ss);
+        }
+    }
+}
 
 fn pass<const N: usize>(a: &Args) -> Vec<Sums> {
     let set = a.set;
     let (w, h) = (set.width as usize, set.height as usize);
     let cam = Camera::new(set.camera, set.width, set.height);
-    let rows: Vec<RowOut> = (0..h)
+    let ctx = SampleCtx {
+        scene: a.scene,
+        cam: &cam,
+        sampler: &set.sampler,
+        stream: 0,
+    };
+    let rows: Vec<RowStrategies> = (0..h)
         .into_par_iter()
         .map(|y| {
-            let mut own: Vec<Sums> = vec![vec![[[0.0; 3]; 2]; a.slots]; w];
-            let mut splats: Vec<(usize, usize, StrategySample)> = Vec::new();
+            let y = y as u32;
+            let mut sink = RowStrategies {
+                width: set.width,
+                height: set.height,
+                start: y * set.width,
+                max_len: a.max_len,
+                own: vec![vec![[[0.0; 3]; 2]; a.slots]; w],
+                splats: Vec::new(),
+            };
             if a.progress.cancelled() {
-                return (own, splats);
+                return sink;
             }
+            let samples = (0..set.width).flat_map(|x| {
+                (0..a.spp).map(move |k| CameraSample {
+                    x,
+                    y,
+                    pixel: y * set.width + x,
+                    index: a.first + k as u64,
+                })
+            });
             let mut c = Counters::default();
-            for (x, own_x) in own.iter_mut().enumerate() {
-                let pixel = y * w + x;
-                for k in 0..a.spp {
-                    let mut st =
-                        SampleStream::new(&set.sampler, 0, pixel as u32, a.first + k as u64);
-                    let mut cb = |ss: StrategySample| {
-                        let Some(j) = slot(ss.s, ss.t, a.max_len) else {
-                            return;
-                        };
-                        if ss.t == 1 {
-                            let (px, py) = (ss.raster.x, ss.raster.y);
-                            if px >= 0.0 && py >= 0.0 && (px as usize) < w && (py as usize) < h {
-                                splats.push((py as usize * w + px as usize, j, ss));
-                            }
-                        } else {
-                            add(&mut own_x[j], &ss);
-                        }
-                    };
-                    bdpt::sample_pixel_with::<N>(
-                        a.scene,
-                        &cam,
-                        x as u32,
-                        y as u32,
-                        &mut st,
-                        &set.integrator,
-                        a.opts,
-                        &mut c,
-                        &mut |_, _| {},
-                        Some(&mut cb),
-                    );
-                }
-            }
+            a.integrator.sample::<N>(&ctx, samples, &mut sink, &mut c);
             a.progress.advance(w as u64 * a.spp as u64);
-            (own, splats)
+            sink
         })
         .collect();
     // Reduce in row order: the same additions in the same order on any thread count.
     let mut sums: Vec<Sums> = Vec::with_capacity(w * h);
     let mut all_splats = Vec::new();
-    for (own, splats) in rows {
-        sums.extend(own);
-        all_splats.push(splats);
+    for r in rows {
+        sums.extend(r.own);
+        all_splats.push(r.splats);
     }
     for splats in all_splats {
         for (p, j, ss) in splats {
