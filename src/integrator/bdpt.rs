@@ -45,7 +45,7 @@ use super::{Counters, IntegratorSettings};
 use crate::material::Bsdf;
 use crate::math::{offset_origin, Frame, Ray, Vec2, Vec3};
 use crate::sampling::SampleStream;
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, Scene, Shading};
 use crate::spectrum::Spectrum;
 use std::f32::consts::FRAC_1_PI;
 
@@ -250,12 +250,8 @@ impl<const N: usize> Vertex<N> {
     /// and the shading frame.
     #[inline]
     fn oriented(&self, w: Vec3) -> (Vec3, Vec3, Frame) {
-        let (ng, ns) = if self.bsdf.is_two_sided() && w.dot(self.ng) < 0.0 {
-            (-self.ng, -self.ns)
-        } else {
-            (self.ng, self.ns)
-        };
-        (ng, ns, Frame::from_normal(ns))
+        let sh = Shading::toward(self.ng, self.ns, w, self.bsdf.is_two_sided());
+        (sh.ng, sh.ns, sh.frame)
     }
 
     /// f(w_o, w_i) of a surface vertex, w_o towards the camera side, w_i towards the light

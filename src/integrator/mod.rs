@@ -1,12 +1,14 @@
 //! Estimators of the radiance along camera rays, behind one interface. They see an
-//! immutable scene and a random stream, never the CLI.
+//! immutable scene, random streams and a `film::Sink`, never a film or the CLI.
 //!
 //! The interface (pbrt-v4's `RayIntegrator::EvaluatePixelSample` + `Film::AddSplat`):
 //! `Integrator::prepare(&Scene, settings)` does each estimator's own precomputation once
-//! per render (the estimate roulette's L~ photon walk today; a radiosity solution or a
-//! light sampler tomorrow); then the pixel loop calls `Integrator::sample` once per camera
-//! sample, which returns the value of that sample for its own pixel and may send any
-//! number of splats to other pixels through a `SplatSink`.
+//! per render (the estimate roulette's L~ photon walk, the radiosity solution); then the
+//! pixel loop calls `Integrator::sample` with a row's camera samples and a sink, which
+//! gets each sample's value for its own pixel, any number of splats to other pixels, and
+//! the layers it asks for (the light seen directly, each pixel's rays, BDPT's strategies).
+//! `Integrator::light_sample` is BDPT's light path traced for light tracing alone, whose
+//! splats go to a sink as well.
 
 pub mod bdpt;
 pub mod gather;
@@ -14,6 +16,7 @@ pub mod lanes;
 pub mod path;
 pub mod phases;
 pub mod rr;
+pub mod step;
 pub mod visible;
 
 use crate::film::{Layer, Sink, StrategySample};
@@ -370,13 +373,13 @@ impl Integrator {
         c: &mut Counters,
     ) {
         let layer = sink.layer();
-        let mut samples = samples.into_iter();
+        let samples = samples.into_iter();
         if self.batches() && layer == Layer::None && !sink.counts_rays() && !sink.wants_strategies()
         {
             return self.sample_batches::<N>(ctx, samples, sink, c);
         }
         let counts_rays = sink.counts_rays();
-        for cs in samples.by_ref() {
+        for cs in samples {
             let rays_before = c.rays;
             let mut s = ctx.stream_of(&cs);
             let (v, part) = match layer {

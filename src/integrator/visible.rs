@@ -5,14 +5,15 @@
 //! Rushmeier and Ward's noise test and filter are about transport noise. A pixel on an
 //! emitter's edge varies from sample to sample only because its footprint straddles the
 //! edge, and its excess is real image structure, not noise to be spread.
-//! `Integrator::sample_split` returns L - f(ray) (a control variate: any f keeps the
-//! estimate unbiased) and f(ray) from one evaluation of the sample, and
+//! `Integrator::sample` gives a sink that asks for `film::Layer::Visible` the value L and
+//! f(ray) from one evaluation of the sample; the film's row sink keeps L - f(ray) (a
+//! control variate: any f keeps the estimate unbiased) and f(ray) apart, and
 //! `pipeline::render_pass_split` writes them to two films, so a method can test and filter
 //! the transport and add the light seen directly back unfiltered.
 
 use crate::material::{dielectric::fresnel_dielectric, Bsdf};
-use crate::math::{offset_origin, Frame, Ray};
-use crate::scene::Scene;
+use crate::math::{offset_origin, Ray};
+use crate::scene::{Scene, Shading};
 use crate::spectrum::Spectrum;
 
 use super::Counters;
@@ -56,12 +57,7 @@ fn trace<const N: usize>(
             return l;
         }
         let bsdf = mat.bsdf;
-        let (ng, ns) = if bsdf.is_two_sided() && cos_o < 0.0 {
-            (-hit.ng, -hit.ns)
-        } else {
-            (hit.ng, hit.ns)
-        };
-        let frame = Frame::from_normal(ns);
+        let Shading { ng, frame, .. } = hit.shading(wo, bsdf.is_two_sided());
         let wo_l = frame.to_local(wo);
         // The next segment's ray from a local direction, if it leaves on the side the
         // geometric normal says (as the path tracer requires).

@@ -15,8 +15,8 @@
 use crate::film::{raster_pixel, Sink, StrategySample};
 use crate::integrator::{CameraSample, Counters, Integrator, IntegratorKind, SampleCtx};
 use crate::math::Vec2;
+use crate::pipeline::RenderSettings;
 use crate::progress::Progress;
-use crate::render::RenderJob;
 use crate::scene::{Camera, Scene};
 use crate::spectrum::per_band;
 use rayon::prelude::*;
@@ -69,31 +69,30 @@ fn slot(s: u32, t: u32, max_length: u32) -> Option<usize> {
     Some((before + within) as usize)
 }
 
-/// Render the strategy images of `job` (an `--integrator bdpt` job, plain method) for the
-/// path lengths up to `max_length` (and the job's --max-depth, if smaller).
-pub fn render_strategies(
-    scene: &Scene,
-    job: &RenderJob,
-    max_length: u32,
-    progress: &dyn Progress,
-) -> Result<Vec<StrategyImage>, String> {
-    let kind = job.integrator_for(scene);
+/// Refuses an estimator other than BDPT.
+pub fn check_estimator(kind: IntegratorKind) -> Result<(), String> {
     if kind != IntegratorKind::Bdpt {
         return Err(format!(
             "--bdpt-strategies: the strategy images are BDPT's; add --integrator bdpt (not {})",
             crate::options::name(&kind)
         ));
     }
-    job.validate()?;
-    let set = job.settings(scene);
-    crate::film::check_resolution(set.width, set.height)?;
-    let spp = match (job.spp, job.time) {
-        (Some(n), _) => n,
-        (None, None) => scene.defaults.spp.unwrap_or(crate::render::DEFAULT_SPP),
-        (None, Some(_)) => {
-            return Err("--bdpt-strategies: give --spp (the strategy images are a fixed number of samples, not --time)".into())
-        }
-    };
+    Ok(())
+}
+
+/// The strategy images of a BDPT render with settings `set` (checked as the render checks
+/// them), sample indices `first..first + spp`, for the path lengths up to `max_length`
+/// (and the settings' --max-depth, if smaller); rows in parallel on the current thread pool.
+/// `render::render_strategies` is the job's front door.
+pub fn render_strategies(
+    scene: &Scene,
+    set: &RenderSettings,
+    first: u64,
+    spp: u32,
+    max_length: u32,
+    progress: &dyn Progress,
+) -> Result<Vec<StrategyImage>, String> {
+    check_estimator(set.integrator.kind)?;
     // The render's estimator (its settings checked as the render does, e.g. --rr off
     // with no depth): BDPT with every strategy, one light subpath per camera sample.
     let integrator = Integrator::prepare(
@@ -106,20 +105,19 @@ pub fn render_strategies(
         d if d >= 0 => max_length.min(d as u32),
         _ => max_length,
     };
-    let (pool, _) = crate::render::thread_pool(job.threads)?;
     let list = strategy_list(max_len);
     let args = Args {
         scene,
-        set: &set,
+        set,
         integrator: &integrator,
-        first: job.first_sample,
+        first,
         spp,
         max_len,
         slots: list.len(),
         progress,
     };
     progress.begin("samples", set.width as u64 * set.height as u64 * spp as u64);
-    let sums = pool.install(|| per_band!(set.spectral, pass(&args)));
+    let sums = per_band!(set.spectral, pass(&args));
     progress.finish();
     if progress.cancelled() {
         return Err("--bdpt-strategies: interrupted, no strategy images written".into());
@@ -145,7 +143,7 @@ pub fn render_strategies(
 
 struct Args<'a> {
     scene: &'a Scene,
-    set: &'a crate::pipeline::RenderSettings,
+    set: &'a RenderSettings,
     integrator: &'a Integrator,
     first: u64,
     spp: u32,
@@ -253,7 +251,6 @@ fn add(acc: &mut [[f64; 3]; 2], ss: &StrategySample) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::Silent;
 
     #[test]
     fn slots_follow_the_list() {
@@ -264,53 +261,5 @@ mod tests {
         assert_eq!(slot(1, 1, 5), None);
         assert_eq!(slot(3, 4, 5), None); // length 6
         assert_eq!(list.len(), 1 + 3 + 4 + 5 + 6);
-    }
-
-    fn job() -> RenderJob {
-        let mut j = RenderJob::new("cornell");
-        j.integrator = Some(IntegratorKind::Bdpt);
-        j.res = Some((12, 10));
-        j.spp = Some(4);
-        j.max_depth = Some(3);
-        j
-    }
-
-    /// The weighted images of every length sum to the render's image (same streams, all
-    /// lengths within --max-depth), and the result does not depend on the thread count.
-    #[test]
-    fn weighted_strategies_sum_to_the_render_on_any_thread_count() {
-        let scene = crate::scene::load("cornell").unwrap();
-        let mut j = job();
-        j.threads = Some(1);
-        let one = render_strategies(&scene, &j, 8, &Silent).unwrap();
-        j.threads = Some(3);
-        let three = render_strategies(&scene, &j, 8, &Silent).unwrap();
-        assert_eq!(one, three);
-        assert_eq!(one.len(), strategy_list(3).len());
-        let r = crate::render::render_scene(&scene, &j, &Silent).unwrap();
-        let mut worst = 0.0f64;
-        for i in 0..120 {
-            let v = r.film.value(i);
-            for (c, &vc) in v.iter().enumerate() {
-                let sum: f64 = one.iter().map(|im| im.weighted[i][c] as f64).sum();
-                worst = worst.max((sum - vc).abs() / vc.abs().max(1e-3));
-            }
-        }
-        assert!(
-            worst < 1e-4,
-            "weighted strategies vs render: relative {worst}"
-        );
-        // (0, 2) is the emitters seen directly: the light's pixels only, same both ways.
-        let direct = one.iter().find(|im| (im.s, im.t) == (0, 2)).unwrap();
-        assert_eq!(direct.weighted, direct.unweighted);
-    }
-
-    #[test]
-    fn refused_without_bdpt() {
-        let scene = crate::scene::load("cornell").unwrap();
-        let mut j = job();
-        j.integrator = Some(IntegratorKind::Path);
-        let e = render_strategies(&scene, &j, 4, &Silent).unwrap_err();
-        assert!(e.contains("--integrator bdpt"), "{e}");
     }
 }
