@@ -1,11 +1,11 @@
-//! The one pixel loop: sample passes over the film, pixels in parallel by rows (rayon),
-//! each row's camera samples evaluated by `Integrator::sample` into the row's
-//! `film::RowSink`. Each sample's random numbers are
+//! The one pixel loop (`each_row`): rows in parallel (rayon), each row's camera samples
+//! evaluated by `Integrator::sample` into the row's sink: the film's `film::RowSink` for
+//! sample passes, the strategy images' own (`strategies`). Each sample's random numbers are
 //! a pure function of (seed, stream, pixel, sample index) and the film's sums are exact,
 //! so the image is bit-identical for any thread count. Splats are collected per row and
 //! added to the film after the pass, in row order.
 
-use crate::film::{Film, PixelStats, RowOut, RowSink, Splats};
+use crate::film::{Film, PixelStats, RowOut, RowSink, Sink, Splats};
 use crate::integrator::{CameraSample, Counters, Integrator, IntegratorSettings, SampleCtx};
 use crate::progress::Progress;
 use crate::sampling::{SampleStream, SamplerConfig};
@@ -111,15 +111,15 @@ pub fn render_pass_split(p: &Pass, film: &mut Film, visible: &mut Film) -> Count
     per_band!(p.set.spectral, pass(p, film, Some(visible), None, None))
 }
 
-fn pass<const N: usize>(
+/// The one pixel loop: the rows of a pass in parallel (rayon), each row's camera samples
+/// (in pixel order, then sample index) evaluated by `Integrator::sample` into that row's
+/// sink (`sinks`: one per row, top to bottom). Returns each row's counters and sink in row
+/// order; a row not yet started when the render is cancelled is left as it was.
+pub fn each_row<const N: usize, S: Sink + Send>(
     p: &Pass,
-    film: &mut Film,
-    visible: Option<&mut Film>,
-    rest: Option<&mut Film>,
-    rays: Option<&mut [u64]>,
-) -> Counters {
+    sinks: impl IndexedParallelIterator<Item = S>,
+) -> Vec<(Counters, S)> {
     let set = p.set;
-    let direct = rest.is_some();
     let cam = Camera::new(set.camera, set.width, set.height);
     let ctx = SampleCtx {
         scene: p.scene,
@@ -127,41 +127,52 @@ fn pass<const N: usize>(
         sampler: &set.sampler,
         stream: p.stream,
     };
+    let w = set.width;
+    sinks
+        .enumerate()
+        .map(|(y, mut sink)| {
+            let mut counters = Counters::default();
+            if p.progress.cancelled() {
+                return (counters, sink);
+            }
+            let y = y as u32;
+            let samples = (0..w).flat_map(|x| {
+                let pixel = y * w + x;
+                let n = p.counts.get(pixel as usize);
+                (0..n).map(move |k| CameraSample {
+                    x,
+                    y,
+                    pixel,
+                    index: p.first_index + k as u64,
+                })
+            });
+            p.integrator
+                .sample::<N>(&ctx, samples, &mut sink, &mut counters);
+            let done: u64 = (0..w)
+                .map(|x| p.counts.get((y * w + x) as usize) as u64)
+                .sum();
+            p.progress.advance(done);
+            (counters, sink)
+        })
+        .collect()
+}
+
+/// A pass over the film: each row's sink is the film's (`film::RowSink`: the row's
+/// pixels, or buffers when splatting; with `visible`, the light seen directly into its
+/// row; with `rest`, the samples less their emission seen directly; with `rays`, each
+/// pixel's rays), added to the film in row order after the pass.
+fn pass<const N: usize>(
+    p: &Pass,
+    film: &mut Film,
+    visible: Option<&mut Film>,
+    mut rest: Option<&mut Film>,
+    rays: Option<&mut [u64]>,
+) -> Counters {
+    let (width, height) = (p.set.width, p.set.height);
+    let direct = rest.is_some();
     let w = film.width as usize;
     let h = film.pixels.len() / w.max(1);
     let splatting = film.splats.is_some();
-    // One row: its samples, in pixel and then sample order, through the estimator into
-    // the row's sink (`film::RowSink`: the row's pixels, or buffers when splatting; with
-    // `visible`, the light seen directly into its row; with `rays`, each pixel's rays).
-    let row = |y: usize,
-               row: &mut [PixelStats],
-               vis_row: Option<&mut [PixelStats]>,
-               row_rays: Option<&mut [u64]>| {
-        let (width, height) = (set.width, set.height);
-        let y32 = y as u32;
-        let mut sink = RowSink::new(
-            width, height, y32, row, vis_row, row_rays, direct, splatting,
-        );
-        let mut counters = Counters::default();
-        if p.progress.cancelled() {
-            return (counters, sink.out);
-        }
-        let samples = (0..w as u32).flat_map(|x| {
-            let pixel = y32 * width + x;
-            let n = p.counts.get(pixel as usize);
-            (0..n).map(move |k| CameraSample {
-                x,
-                y: y32,
-                pixel,
-                index: p.first_index + k as u64,
-            })
-        });
-        p.integrator
-            .sample::<N>(&ctx, samples, &mut sink, &mut counters);
-        let done: u64 = (0..w).map(|x| p.counts.get(y * w + x) as u64).sum();
-        p.progress.advance(done);
-        (counters, sink.out)
-    };
     // each row's share of the optional outputs, as one list per output
     let vis_rows: Vec<Option<&mut [PixelStats]>> = match visible {
         Some(v) => v.pixels.chunks_mut(w).map(Some).collect(),
@@ -171,16 +182,20 @@ fn pass<const N: usize>(
         Some(r) => r.chunks_mut(w).map(Some).collect(),
         None => (0..h).map(|_| None).collect(),
     };
-    let outs: Vec<(Counters, RowOut)> = film
+    let sinks = film
         .pixels
         .par_chunks_mut(w)
         .zip(vis_rows)
         .zip(ray_rows)
         .enumerate()
-        .map(|(y, ((px, vr), rr))| row(y, px, vr, rr))
+        .map(|(y, ((px, vr), rr))| {
+            RowSink::new(width, height, y as u32, px, vr, rr, direct, splatting)
+        });
+    let outs: Vec<(Counters, RowOut)> = each_row::<N, _>(p, sinks)
+        .into_iter()
+        .map(|(c, sink)| (c, sink.out))
         .collect();
     let mut counters = Counters::default();
-    let mut rest = rest;
     for (c, o) in outs {
         counters.add(&c);
         film.add_row(&o, rest.as_deref_mut());

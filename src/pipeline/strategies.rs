@@ -4,7 +4,7 @@
 //! adds to the render) and unweighted (C*_{s,t}: an estimate of the whole light of that
 //! path length, by that strategy alone).
 //!
-//! A pass over the pixels calls `Integrator::sample` with a sink that reads the strategies
+//! A pass of the one pixel loop (`render::each_row`) with a sink that reads the strategies
 //! (`film::Sink::strategy`). Camera-side strategies (t >= 2) add to their own pixel, light
 //! tracing (t = 1) to the pixel its splat lands in; every image is the sum divided by the samples per pixel (one light
 //! subpath per camera sample, as in the render). Rows run in parallel, each keeping its own
@@ -13,11 +13,11 @@
 //! `first..first + spp`), so the weighted images of every path length sum to the render.
 
 use crate::film::{raster_pixel, Sink, StrategySample};
-use crate::integrator::{CameraSample, Counters, Integrator, IntegratorKind, SampleCtx};
+use crate::integrator::{Integrator, IntegratorKind};
 use crate::math::Vec2;
-use crate::pipeline::RenderSettings;
+use crate::pipeline::render::{each_row, Counts, Pass, RenderSettings};
 use crate::progress::Progress;
-use crate::scene::{Camera, Scene};
+use crate::scene::Scene;
 use crate::spectrum::per_band;
 use rayon::prelude::*;
 
@@ -106,18 +106,17 @@ pub fn render_strategies(
         _ => max_length,
     };
     let list = strategy_list(max_len);
-    let args = Args {
+    let pass = Pass {
         scene,
-        set,
         integrator: &integrator,
-        first,
-        spp,
-        max_len,
-        slots: list.len(),
+        set,
+        counts: Counts::Uniform(spp),
+        first_index: first,
+        stream: 0,
         progress,
     };
     progress.begin("samples", set.width as u64 * set.height as u64 * spp as u64);
-    let sums = per_band!(set.spectral, pass(&args));
+    let sums = per_band!(set.spectral, pass_sums(&pass, max_len, list.len()));
     progress.finish();
     if progress.cancelled() {
         return Err("--bdpt-strategies: interrupted, no strategy images written".into());
@@ -139,17 +138,6 @@ pub fn render_strategies(
                 .collect(),
         })
         .collect())
-}
-
-struct Args<'a> {
-    scene: &'a Scene,
-    set: &'a RenderSettings,
-    integrator: &'a Integrator,
-    first: u64,
-    spp: u32,
-    max_len: u32,
-    slots: usize,
-    progress: &'a dyn Progress,
 }
 
 /// Per pixel, per strategy: [weighted, unweighted] RGB sums.
@@ -186,49 +174,23 @@ impl Sink for RowStrategies {
     }
 }
 
-fn pass<const N: usize>(a: &Args) -> Vec<Sums> {
-    let set = a.set;
-    let (w, h) = (set.width as usize, set.height as usize);
-    let cam = Camera::new(set.camera, set.width, set.height);
-    let ctx = SampleCtx {
-        scene: a.scene,
-        cam: &cam,
-        sampler: &set.sampler,
-        stream: 0,
-    };
-    let rows: Vec<RowStrategies> = (0..h)
-        .into_par_iter()
-        .map(|y| {
-            let y = y as u32;
-            let mut sink = RowStrategies {
-                width: set.width,
-                height: set.height,
-                start: y * set.width,
-                max_len: a.max_len,
-                own: vec![vec![[[0.0; 3]; 2]; a.slots]; w],
-                splats: Vec::new(),
-            };
-            if a.progress.cancelled() {
-                return sink;
-            }
-            let samples = (0..set.width).flat_map(|x| {
-                (0..a.spp).map(move |k| CameraSample {
-                    x,
-                    y,
-                    pixel: y * set.width + x,
-                    index: a.first + k as u64,
-                })
-            });
-            let mut c = Counters::default();
-            a.integrator.sample::<N>(&ctx, samples, &mut sink, &mut c);
-            a.progress.advance(w as u64 * a.spp as u64);
-            sink
-        })
-        .collect();
+/// Each pixel's sums over the pass `p` (strategy slots of the lengths up to `max_len`).
+fn pass_sums<const N: usize>(p: &Pass, max_len: u32, slots: usize) -> Vec<Sums> {
+    let (width, height) = (p.set.width, p.set.height);
+    let (w, h) = (width as usize, height as usize);
+    let sinks = (0..height).into_par_iter().map(|y| RowStrategies {
+        width,
+        height,
+        start: y * width,
+        max_len,
+        own: vec![vec![[[0.0; 3]; 2]; slots]; w],
+        splats: Vec::new(),
+    });
+    let rows = each_row::<N, _>(p, sinks);
     // Reduce in row order: the same additions in the same order on any thread count.
     let mut sums: Vec<Sums> = Vec::with_capacity(w * h);
     let mut all_splats = Vec::new();
-    for r in rows {
+    for (_, r) in rows {
         sums.extend(r.own);
         all_splats.push(r.splats);
     }
