@@ -701,6 +701,39 @@ pub fn render_scene(
     })
 }
 
+/// BDPT's strategy images of `job` (`pipeline::strategies`: an `--integrator bdpt` job,
+/// a fixed number of samples) for the path lengths up to `max_length` (and the job's
+/// --max-depth, if smaller), on the job's thread pool.
+pub fn render_strategies(
+    scene: &Scene,
+    job: &RenderJob,
+    max_length: u32,
+    progress: &dyn Progress,
+) -> Result<Vec<pipeline::strategies::StrategyImage>, String> {
+    pipeline::strategies::check_estimator(job.integrator_for(scene))?;
+    job.validate()?;
+    let set = job.settings(scene);
+    crate::film::check_resolution(set.width, set.height)?;
+    let spp = match (job.spp, job.time) {
+        (Some(n), _) => n,
+        (None, None) => scene.defaults.spp.unwrap_or(DEFAULT_SPP),
+        (None, Some(_)) => {
+            return Err("--bdpt-strategies: give --spp (the strategy images are a fixed number of samples, not --time)".into())
+        }
+    };
+    let (pool, _) = thread_pool(job.threads)?;
+    pool.install(|| {
+        pipeline::strategies::render_strategies(
+            scene,
+            &set,
+            job.first_sample,
+            spp,
+            max_length,
+            progress,
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

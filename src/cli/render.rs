@@ -432,7 +432,8 @@ fn write_bdpt_strategies(
     job: &crate::render::RenderJob,
     progress: &dyn crate::progress::Progress,
 ) -> Result<(), String> {
-    use crate::pipeline::strategies::{render_strategies, DEFAULT_MAX_LENGTH};
+    use crate::pipeline::strategies::DEFAULT_MAX_LENGTH;
+    use crate::render::render_strategies;
     let scene = crate::scene::load_with(&job.scene, &job.defines)?;
     let images = render_strategies(&scene, job, DEFAULT_MAX_LENGTH, progress)?;
     let set = job.settings(&scene);

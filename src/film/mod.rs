@@ -17,12 +17,14 @@
 //! (`file.rs`), the same bits.
 
 mod file;
+mod sink;
 mod splat;
 mod stats;
 
 pub use file::{
     film_from_bytes, film_to_bytes, merge_files, read_film, write_film, FilmFile, FILM_VERSION,
 };
+pub use sink::{raster_pixel, Layer, RowOut, RowSink, Sink, Splat, Splats, StrategySample};
 pub use splat::{SplatFilm, BATCHES};
 pub use stats::{PixelStats, Rejections, SAMPLE_MAX};
 

@@ -45,7 +45,7 @@ use super::{Counters, IntegratorSettings};
 use crate::material::Bsdf;
 use crate::math::{offset_origin, Frame, Ray, Vec2, Vec3};
 use crate::sampling::SampleStream;
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, Scene, Shading};
 use crate::spectrum::Spectrum;
 use std::f32::consts::FRAC_1_PI;
 
@@ -150,23 +150,8 @@ impl LtRatio {
 pub const LT_RATIO_MIN: f32 = 1.0 / 64.0;
 pub const LT_RATIO_MAX: f32 = 64.0;
 
-/// One strategy's contribution, for the debug layers (pbrt's visualizestrategies).
-#[derive(Clone, Copy, Debug)]
-pub struct StrategySample {
-    pub s: u32,
-    pub t: u32,
-    /// Film position: the camera sample's for t >= 2, the splat's for t = 1.
-    pub raster: Vec2,
-    /// Linear RGB, MIS-weighted.
-    pub weighted: [f32; 3],
-    /// Linear RGB, without the MIS weight.
-    pub unweighted: [f32; 3],
-    /// Emission seen directly: s = 0 and every camera vertex between the pinhole and the
-    /// emitter (y_1 .. y_{t-2}) scattered by a Dirac lobe (mirrors, smooth glass), so the
-    /// contribution is a function of the camera ray's jitter and the glass's Fresnel
-    /// choices only (DTF adds it back unfiltered, `DirectMode`).
-    pub direct: bool,
-}
+/// One strategy's contribution (the film's record of it: a sink's strategy layer).
+pub use crate::film::StrategySample;
 
 const NO_LIGHT: u32 = u32::MAX;
 
@@ -265,12 +250,8 @@ impl<const N: usize> Vertex<N> {
     /// and the shading frame.
     #[inline]
     fn oriented(&self, w: Vec3) -> (Vec3, Vec3, Frame) {
-        let (ng, ns) = if self.bsdf.is_two_sided() && w.dot(self.ng) < 0.0 {
-            (-self.ng, -self.ns)
-        } else {
-            (self.ng, self.ns)
-        };
-        (ng, ns, Frame::from_normal(ns))
+        let sh = Shading::toward(self.ng, self.ns, w, self.bsdf.is_two_sided());
+        (sh.ng, sh.ns, sh.frame)
     }
 
     /// f(w_o, w_i) of a surface vertex, w_o towards the camera side, w_i towards the light

@@ -62,7 +62,7 @@ use crate::material::Bsdf;
 use crate::math::{offset_origin, Frame, Ray, Vec3};
 use crate::radiosity::Solution;
 use crate::sampling::SampleStream;
-use crate::scene::Scene;
+use crate::scene::{Scene, Shading};
 use crate::spectrum::Spectrum;
 use glam::Vec2;
 
@@ -165,12 +165,7 @@ pub fn radiance<const N: usize>(
             break;
         }
 
-        let (ng, ns) = if bsdf.is_two_sided() && !front {
-            (-hit.ng, -hit.ns)
-        } else {
-            (hit.ng, hit.ns)
-        };
-        let frame = Frame::from_normal(ns);
+        let Shading { ng, frame, .. } = Shading::new(hit.ng, hit.ns, bsdf.is_two_sided() && !front);
         let wo_l = frame.to_local(wo);
 
         s.set_dimension(DIMS_CAMERA + (segments - 1) * DIMS_PER_BOUNCE);
@@ -379,12 +374,7 @@ fn incident<const N: usize>(
             break;
         }
         // a mirror or glass: follow the sampled specular direction
-        let (ng, ns) = if bsdf.is_two_sided() && !front {
-            (-hit.ng, -hit.ns)
-        } else {
-            (hit.ng, hit.ns)
-        };
-        let frame = Frame::from_normal(ns);
+        let Shading { ng, frame, .. } = Shading::new(hit.ng, hit.ns, bsdf.is_two_sided() && !front);
         let wo_l = frame.to_local(wo);
         let sel = set.roulette.select::<N>(segments - 1, &thr, &bsdf);
         let u_lobe = s.next_1d();
@@ -440,12 +430,7 @@ pub fn preview<const N: usize>(
             break;
         }
         // mirror or glass: follow the sampled specular direction
-        let (ng, ns) = if bsdf.is_two_sided() && !front {
-            (-hit.ng, -hit.ns)
-        } else {
-            (hit.ng, hit.ns)
-        };
-        let frame = Frame::from_normal(ns);
+        let Shading { ng, frame, .. } = Shading::new(hit.ng, hit.ns, bsdf.is_two_sided() && !front);
         s.set_dimension(DIMS_CAMERA + segment * DIMS_PER_BOUNCE + 3);
         let u_lobe = s.next_1d();
         let u = s.next_2d();

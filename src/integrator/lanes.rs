@@ -9,15 +9,16 @@
 //! continuation. Such vertices are put into structure-of-arrays lanes and finished by one
 //! loop over all [`L`] lanes, which the compiler runs in SIMD registers (eight paths per
 //! AVX2 instruction where the CPU has it, chosen at run time; SSE2 elsewhere). Each lane
-//! calls the one-path code's parts (`path::ToPoint`, `Lambert::sample_any`,
-//! `Selection::roulette`, `path::continued`) on its own values, with their tests kept as
+//! calls the one-path code's parts (`step::ToPoint`, `Lambert::sample_any`,
+//! `Selection::roulette`, `step::continued`) on its own values, with their tests kept as
 //! flags instead of early returns, so a path's numbers are the same bit for bit whichever
 //! way it goes.
 
-use super::path::{continued, ToPoint, BATCH_PATHS, SHADOW_T_MAX};
 use super::rr::Selection;
+use super::step::{continued, ToPoint, BATCH_PATHS, SHADOW_T_MAX};
 use crate::material::Lambert;
-use crate::math::{Frame, Ray, Vec3};
+use crate::math::{Ray, Vec3};
+use crate::scene::Shading;
 use crate::spectrum::Spectrum;
 
 /// Lanes of one batch: one per path of a step.
@@ -225,7 +226,8 @@ impl<const N: usize> Lanes<N> {
             let v3 = |a: In, b: In, c: In| Vec3::new(x(a), x(b), x(c));
             let p = v3(In::Px, In::Py, In::Pz);
             let ng = v3(In::Ngx, In::Ngy, In::Ngz);
-            let frame = Frame::from_normal(v3(In::Nsx, In::Nsy, In::Nsz));
+            // (the normals as the path oriented them when it pushed the vertex)
+            let Shading { frame, .. } = Shading::new(ng, v3(In::Nsx, In::Nsy, In::Nsz), false);
             let wo_l = frame.to_local(v3(In::Wox, In::Woy, In::Woz));
             let lam = Lambert {
                 kd: [x(In::KdR), x(In::KdG), x(In::KdB)],

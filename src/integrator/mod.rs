@@ -1,12 +1,14 @@
 //! Estimators of the radiance along camera rays, behind one interface. They see an
-//! immutable scene and a random stream, never the CLI.
+//! immutable scene, random streams and a `film::Sink`, never a film or the CLI.
 //!
 //! The interface (pbrt-v4's `RayIntegrator::EvaluatePixelSample` + `Film::AddSplat`):
 //! `Integrator::prepare(&Scene, settings)` does each estimator's own precomputation once
-//! per render (the estimate roulette's L~ photon walk today; a radiosity solution or a
-//! light sampler tomorrow); then the pixel loop calls `Integrator::sample` once per camera
-//! sample, which returns the value of that sample for its own pixel and may send any
-//! number of splats to other pixels through a `SplatSink`.
+//! per render (the estimate roulette's L~ photon walk, the radiosity solution); then the
+//! pixel loop calls `Integrator::sample` with a row's camera samples and a sink, which
+//! gets each sample's value for its own pixel, any number of splats to other pixels, and
+//! the layers it asks for (the light seen directly, each pixel's rays, BDPT's strategies).
+//! `Integrator::light_sample` is BDPT's light path traced for light tracing alone, whose
+//! splats go to a sink as well.
 
 pub mod bdpt;
 pub mod gather;
@@ -14,10 +16,12 @@ pub mod lanes;
 pub mod path;
 pub mod phases;
 pub mod rr;
+pub mod step;
 pub mod visible;
 
+use crate::film::{Layer, Sink, StrategySample};
 use crate::math::{Ray, Vec2, Vec3};
-use crate::sampling::SampleStream;
+use crate::sampling::{SampleStream, SamplerConfig};
 use crate::scene::{Camera, Scene};
 
 pub use bdpt::MisHeuristic;
@@ -126,51 +130,29 @@ impl Counters {
     }
 }
 
-/// One splat: a contribution to pixel `pixel` by the sample of index `index`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Splat {
+/// One camera sample to evaluate: pixel (x, y), its row-major number and its sample index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CameraSample {
+    pub x: u32,
+    pub y: u32,
     pub pixel: u32,
-    pub index: u32,
-    pub rgb: [f32; 3],
+    pub index: u64,
 }
 
-/// Where an estimator sends contributions to other pixels: a per-chunk buffer that the
-/// pipeline adds to the film in a fixed order (the film's sums are exact, so the order
-/// does not change the image either).
-#[derive(Clone, Debug, Default)]
-pub struct SplatSink {
-    pub width: u32,
-    pub height: u32,
-    /// Sample index of the camera sample being evaluated (its batch).
-    pub index: u32,
-    pub splats: Vec<Splat>,
+/// What the camera samples of a pass share: the scene, the camera and their random
+/// streams (sample k of pixel p draws from `SampleStream::new(sampler, stream, p, k)`).
+#[derive(Clone, Copy)]
+pub struct SampleCtx<'a> {
+    pub scene: &'a Scene,
+    pub cam: &'a Camera,
+    pub sampler: &'a SamplerConfig,
+    pub stream: u32,
 }
 
-impl SplatSink {
-    pub fn new(width: u32, height: u32) -> Self {
-        SplatSink {
-            width,
-            height,
-            index: 0,
-            splats: Vec::new(),
-        }
-    }
-
-    /// Splat linear RGB at raster position `p` (pixel (x, y) covers [x, x+1) x [y, y+1));
-    /// positions outside the image are dropped.
+impl SampleCtx<'_> {
     #[inline]
-    pub fn splat(&mut self, p: Vec2, rgb: [f32; 3]) {
-        if !(p.x >= 0.0 && p.y >= 0.0) {
-            return;
-        }
-        let (x, y) = (p.x as u32, p.y as u32);
-        if x < self.width && y < self.height {
-            self.splats.push(Splat {
-                pixel: y * self.width + x,
-                index: self.index,
-                rgb,
-            });
-        }
+    fn stream_of(&self, cs: &CameraSample) -> SampleStream {
+        SampleStream::new(self.sampler, self.stream, cs.pixel, cs.index)
     }
 }
 
@@ -320,18 +302,20 @@ impl Integrator {
         self.set.kind == IntegratorKind::Bdpt
     }
 
-    /// One light subpath for light tracing alone (BDPT): its (s, 1) connections go to
-    /// `sink`; no camera sample. Other estimators do nothing.
+    /// One light subpath for light tracing alone (BDPT), the light path of index `index`:
+    /// its (s, 1) connections go to `sink` as splats; no camera sample. Other estimators
+    /// do nothing.
     pub fn light_sample<const N: usize>(
         &self,
-        scene: &Scene,
-        cam: &Camera,
+        ctx: &SampleCtx,
         s: &mut SampleStream,
-        sink: &mut SplatSink,
+        index: u64,
+        sink: &mut impl Sink,
         c: &mut Counters,
     ) {
         if self.set.kind == IntegratorKind::Bdpt {
-            let mut to_sink = |p: Vec2, rgb: [f32; 3]| sink.splat(p, rgb);
+            let mut to_sink = |p: Vec2, rgb: [f32; 3]| sink.splat(index, p, rgb);
+            let (scene, cam) = (ctx.scene, ctx.cam);
             bdpt::light_path_sample::<N>(scene, cam, s, &self.set, &self.bdpt, c, &mut to_sink);
         }
     }
@@ -358,7 +342,7 @@ impl Integrator {
         }
     }
 
-    /// Whether [`Integrator::sample_batch`] serves this estimator: the path tracer without
+    /// Whether the path tracer's batches serve this estimator: the path tracer without
     /// the radiosity gather (on any scene: `Bvh::trace` answers a batch's queries the way
     /// the tree's size favours).
     pub fn batches(&self) -> bool {
@@ -369,110 +353,143 @@ impl Integrator {
             )
     }
 
-    /// [`Integrator::sample`] of up to [`path::BATCH_PATHS`] samples at once (for an
-    /// estimator that [`Integrator::batches`]): sample `i` is of pixel `pixels[i]` with
-    /// stream `streams[i]`; the same values as one at a time, into `out`.
-    pub fn sample_batch<const N: usize>(
-        &self,
-        scene: &Scene,
-        cam: &Camera,
-        pixels: &[(u32, u32)],
-        streams: &mut [SampleStream],
-        c: &mut Counters,
-        out: &mut [[f32; 3]],
-    ) {
-        debug_assert!(matches!(self.set.kind, IntegratorKind::Path));
-        let n = pixels.len();
-        let mut rays = [Ray::new(Vec3::ZERO, Vec3::ZERO); path::BATCH_PATHS];
-        for ((r, &(x, y)), s) in rays.iter_mut().zip(pixels).zip(streams.iter_mut()) {
-            *r = camera_ray(cam, x, y, s);
-        }
-        let mut l = [crate::spectrum::Spectrum::<N>::ZERO; path::BATCH_PATHS];
-        let lt = self.l_tilde::<N>();
-        path::radiance_batch::<N>(scene, &rays[..n], streams, &self.set, &lt, c, &mut l[..n]);
-        for (o, v) in out.iter_mut().zip(&l[..n]) {
-            *o = v.to_rgb();
-        }
-    }
-
-    /// One camera sample of pixel (x, y): its value (linear RGB); splats go to `sink`.
-    #[inline]
-    #[allow(clippy::too_many_arguments)]
-    pub fn sample<const N: usize>(
-        &self,
-        scene: &Scene,
-        cam: &Camera,
-        x: u32,
-        y: u32,
-        s: &mut SampleStream,
-        sink: &mut SplatSink,
-        c: &mut Counters,
-    ) -> [f32; 3] {
-        self.sample_all::<N>(scene, cam, x, y, s, sink, c)
-    }
-
-    /// One camera sample of a non-splatting estimator split in two (`visible.rs`): the
-    /// transport L - f(ray) and the light seen directly f(ray), whose sum is `sample`'s
-    /// value.
-    #[inline]
-    pub fn sample_split<const N: usize>(
-        &self,
-        scene: &Scene,
-        cam: &Camera,
-        x: u32,
-        y: u32,
-        s: &mut SampleStream,
-        c: &mut Counters,
-    ) -> ([f32; 3], [f32; 3]) {
-        let ray = camera_ray(cam, x, y, &mut s.clone());
-        let f = visible::emission::<N>(scene, ray, self.set.max_segments(), c).to_rgb();
-        let mut sink = SplatSink::new(1, 1);
-        let l = self.sample_all::<N>(scene, cam, x, y, s, &mut sink, c);
-        debug_assert!(sink.splats.is_empty(), "a split sample splatted");
-        ([l[0] - f[0], l[1] - f[1], l[2] - f[2]], f)
-    }
-
-    /// Whether [`Integrator::sample_direct`] serves this estimator: BDPT, whose camera
-    /// subpath already carries the emission seen directly (its s = 0 strategies through
-    /// Dirac vertices only), so the split costs no ray.
+    /// Whether [`Layer::Direct`] means anything here: BDPT, whose camera subpath already
+    /// carries the emission seen directly (its s = 0 strategies through Dirac vertices
+    /// only), so the split costs no ray.
     pub fn splits_direct(&self) -> bool {
         self.set.kind == IntegratorKind::Bdpt
     }
 
-    /// One camera sample of pixel (x, y) as [`Integrator::sample`], and the part of its
-    /// value that is emission seen directly (`bdpt::StrategySample::direct`: the MIS-weighted
-    /// s = 0 contributions whose camera vertices before the emitter are all Dirac). Splats
-    /// go to `sink` as usual; they never hold emission seen directly. Only for an
-    /// estimator that [`Integrator::splits_direct`] (others: a direct part of 0).
-    #[inline]
-    #[allow(clippy::too_many_arguments)]
-    pub fn sample_direct<const N: usize>(
+    /// The one entry point of the pixel loop: the camera samples `samples`, in order, each
+    /// written to `sink` (its value and the part of it that [`Sink::layer`] asks for), with
+    /// any splats, rays ([`Sink::counts_rays`]) and strategies ([`Sink::wants_strategies`])
+    /// the sink reads. The path tracer takes up to [`path::BATCH_PATHS`] samples at a time
+    /// when the sink reads their values only: the same values as one at a time.
+    pub fn sample<const N: usize>(
         &self,
-        scene: &Scene,
-        cam: &Camera,
-        x: u32,
-        y: u32,
+        ctx: &SampleCtx,
+        samples: impl IntoIterator<Item = CameraSample>,
+        sink: &mut impl Sink,
+        c: &mut Counters,
+    ) {
+        let layer = sink.layer();
+        let samples = samples.into_iter();
+        if self.batches() && layer == Layer::None && !sink.counts_rays() && !sink.wants_strategies()
+        {
+            return self.sample_batches::<N>(ctx, samples, sink, c);
+        }
+        let counts_rays = sink.counts_rays();
+        for cs in samples {
+            let rays_before = c.rays;
+            let mut s = ctx.stream_of(&cs);
+            let (v, part) = match layer {
+                Layer::None if !sink.wants_strategies() => {
+                    (self.one::<N>(ctx, &cs, &mut s, sink, c), [0.0; 3])
+                }
+                Layer::Visible => {
+                    // f(ray) from a copy of the stream: the sample itself draws the same
+                    // numbers
+                    let ray = camera_ray(ctx.cam, cs.x, cs.y, &mut s.clone());
+                    let f = visible::emission::<N>(ctx.scene, ray, self.set.max_segments(), c);
+                    let mut no_splats = NoSplats;
+                    let l = self.one::<N>(ctx, &cs, &mut s, &mut no_splats, c);
+                    (l, f.to_rgb())
+                }
+                Layer::None | Layer::Direct => self.with_strategies::<N>(ctx, &cs, &mut s, sink, c),
+            };
+            sink.sample(cs.pixel, cs.index, v, part);
+            if counts_rays {
+                sink.rays(cs.pixel, c.rays - rays_before);
+            }
+        }
+    }
+
+    /// The path tracer's samples, [`path::BATCH_PATHS`] at a time through `Bvh::trace`.
+    fn sample_batches<const N: usize>(
+        &self,
+        ctx: &SampleCtx,
+        mut samples: impl Iterator<Item = CameraSample>,
+        sink: &mut impl Sink,
+        c: &mut Counters,
+    ) {
+        debug_assert!(matches!(self.set.kind, IntegratorKind::Path));
+        let lt = self.l_tilde::<N>();
+        let mut todo = [CameraSample {
+            x: 0,
+            y: 0,
+            pixel: 0,
+            index: 0,
+        }; path::BATCH_PATHS];
+        let mut streams = Vec::with_capacity(path::BATCH_PATHS);
+        let mut rays = [Ray::new(Vec3::ZERO, Vec3::ZERO); path::BATCH_PATHS];
+        loop {
+            let mut n = 0;
+            for (t, cs) in todo.iter_mut().zip(samples.by_ref()) {
+                *t = cs;
+                n += 1;
+            }
+            if n == 0 {
+                return;
+            }
+            streams.clear();
+            streams.extend(todo[..n].iter().map(|cs| ctx.stream_of(cs)));
+            for ((r, cs), s) in rays.iter_mut().zip(&todo[..n]).zip(streams.iter_mut()) {
+                *r = camera_ray(ctx.cam, cs.x, cs.y, s);
+            }
+            let mut l = [crate::spectrum::Spectrum::<N>::ZERO; path::BATCH_PATHS];
+            path::radiance_batch::<N>(
+                ctx.scene,
+                &rays[..n],
+                &mut streams,
+                &self.set,
+                &lt,
+                c,
+                &mut l[..n],
+            );
+            for (cs, v) in todo[..n].iter().zip(&l[..n]) {
+                sink.sample(cs.pixel, cs.index, v.to_rgb(), [0.0; 3]);
+            }
+            if n < path::BATCH_PATHS {
+                return;
+            }
+        }
+    }
+
+    /// One BDPT sample whose strategies the sink reads, or whose emission seen directly
+    /// it keeps apart ([`Layer::Direct`]): (value, emission seen directly). Other
+    /// estimators: their sample and 0.
+    fn with_strategies<const N: usize>(
+        &self,
+        ctx: &SampleCtx,
+        cs: &CameraSample,
         s: &mut SampleStream,
-        sink: &mut SplatSink,
+        sink: &mut impl Sink,
         c: &mut Counters,
     ) -> ([f32; 3], [f32; 3]) {
         if self.set.kind != IntegratorKind::Bdpt {
-            return (self.sample_all::<N>(scene, cam, x, y, s, sink, c), [0.0; 3]);
+            return (self.one::<N>(ctx, cs, s, sink, c), [0.0; 3]);
         }
+        let wants = sink.wants_strategies();
         let mut direct = [0.0f32; 3];
-        let mut to_sink = |p: Vec2, rgb: [f32; 3]| sink.splat(p, rgb);
-        let mut on_strategy = |st: bdpt::StrategySample| {
+        // (the strategies reach the sink after the sample: the splats hold it meanwhile)
+        let mut strategies = Vec::new();
+        let mut on_strategy = |st: StrategySample| {
             if st.direct {
                 for (d, v) in direct.iter_mut().zip(st.weighted) {
                     *d += v;
                 }
             }
+            if wants {
+                strategies.push(st);
+            }
         };
+        let index = cs.index;
+        let mut to_sink = |p: Vec2, rgb: [f32; 3]| sink.splat(index, p, rgb);
         let l = bdpt::sample_pixel_with::<N>(
-            scene,
-            cam,
-            x,
-            y,
+            ctx.scene,
+            ctx.cam,
+            cs.x,
+            cs.y,
             s,
             &self.set,
             &self.bdpt,
@@ -480,21 +497,23 @@ impl Integrator {
             &mut to_sink,
             Some(&mut on_strategy),
         );
+        for st in &strategies {
+            sink.strategy(cs.pixel, st);
+        }
         (l, direct)
     }
 
+    /// One camera sample's value; its splats go to `sink`.
     #[inline]
-    #[allow(clippy::too_many_arguments)]
-    fn sample_all<const N: usize>(
+    fn one<const N: usize>(
         &self,
-        scene: &Scene,
-        cam: &Camera,
-        x: u32,
-        y: u32,
+        ctx: &SampleCtx,
+        cs: &CameraSample,
         s: &mut SampleStream,
-        sink: &mut SplatSink,
+        sink: &mut impl Sink,
         c: &mut Counters,
     ) -> [f32; 3] {
+        let (scene, cam, x, y) = (ctx.scene, ctx.cam, cs.x, cs.y);
         let l_tilde = || self.l_tilde::<N>();
         match self.set.kind {
             IntegratorKind::Path => {
@@ -515,7 +534,8 @@ impl Integrator {
                 }
             }
             IntegratorKind::Bdpt => {
-                let mut to_sink = |p: Vec2, rgb: [f32; 3]| sink.splat(p, rgb);
+                let index = cs.index;
+                let mut to_sink = |p: Vec2, rgb: [f32; 3]| sink.splat(index, p, rgb);
                 bdpt::sample_pixel_with::<N>(
                     scene,
                     cam,
@@ -541,12 +561,23 @@ impl Integrator {
             }
             #[cfg(test)]
             IntegratorKind::SplatTest => {
-                let _ = (scene, cam, s, c);
-                let to = Vec2::new(((x + 1) % sink.width) as f32 + 0.5, y as f32 + 0.5);
-                sink.splat(to, [x as f32, y as f32, 1.0]);
+                let _ = (scene, s, c);
+                let to = Vec2::new(((x + 1) % cam.width) as f32 + 0.5, y as f32 + 0.5);
+                sink.splat(cs.index, to, [x as f32, y as f32, 1.0]);
                 [0.0; 3]
             }
         }
+    }
+}
+
+/// The sink of a sample that must not splat ([`Layer::Visible`]: estimators that do not
+/// splat).
+struct NoSplats;
+
+impl Sink for NoSplats {
+    fn sample(&mut self, _: u32, _: u64, _: [f32; 3], _: [f32; 3]) {}
+    fn splat(&mut self, _: u64, _: Vec2, _: [f32; 3]) {
+        debug_assert!(false, "a split sample splatted");
     }
 }
 

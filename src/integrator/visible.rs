@@ -5,14 +5,15 @@
 //! Rushmeier and Ward's noise test and filter are about transport noise. A pixel on an
 //! emitter's edge varies from sample to sample only because its footprint straddles the
 //! edge, and its excess is real image structure, not noise to be spread.
-//! `Integrator::sample_split` returns L - f(ray) (a control variate: any f keeps the
-//! estimate unbiased) and f(ray) from one evaluation of the sample, and
+//! `Integrator::sample` gives a sink that asks for `film::Layer::Visible` the value L and
+//! f(ray) from one evaluation of the sample; the film's row sink keeps L - f(ray) (a
+//! control variate: any f keeps the estimate unbiased) and f(ray) apart, and
 //! `pipeline::render_pass_split` writes them to two films, so a method can test and filter
 //! the transport and add the light seen directly back unfiltered.
 
 use crate::material::{dielectric::fresnel_dielectric, Bsdf};
-use crate::math::{offset_origin, Frame, Ray};
-use crate::scene::Scene;
+use crate::math::{offset_origin, Ray};
+use crate::scene::{Scene, Shading};
 use crate::spectrum::Spectrum;
 
 use super::Counters;
@@ -56,12 +57,7 @@ fn trace<const N: usize>(
             return l;
         }
         let bsdf = mat.bsdf;
-        let (ng, ns) = if bsdf.is_two_sided() && cos_o < 0.0 {
-            (-hit.ng, -hit.ns)
-        } else {
-            (hit.ng, hit.ns)
-        };
-        let frame = Frame::from_normal(ns);
+        let Shading { ng, frame, .. } = hit.shading(wo, bsdf.is_two_sided());
         let wo_l = frame.to_local(wo);
         // The next segment's ray from a local direction, if it leaves on the side the
         // geometric normal says (as the path tracer requires).
@@ -120,9 +116,25 @@ fn trace<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrator::{Integrator, IntegratorSettings, SplatSink};
-    use crate::sampling::{SampleStream, SamplerConfig};
+    use crate::film::{Layer, Sink};
+    use crate::integrator::{CameraSample, Integrator, IntegratorSettings, SampleCtx};
+    use crate::sampling::SamplerConfig;
     use crate::scene::Camera;
+
+    /// The last sample's value and layer part, with the layer asked for.
+    struct Last(Layer, [[f32; 3]; 2]);
+
+    impl Sink for Last {
+        fn layer(&self) -> Layer {
+            self.0
+        }
+        fn sample(&mut self, _: u32, _: u64, value: [f32; 3], part: [f32; 3]) {
+            self.1 = [value, part];
+        }
+        fn splat(&mut self, _: u64, _: crate::math::Vec2, _: [f32; 3]) {
+            panic!("the path tracer splatted");
+        }
+    }
 
     /// Sample by sample, the transport (L - f) plus the light seen directly (f) is the
     /// plain estimate, and f is the whole of a sample that sees only an emitter: on
@@ -141,18 +153,30 @@ mod tests {
             )
             .unwrap();
             let cfg = SamplerConfig::default();
-            let mut sink = SplatSink::new(w, h);
+            let ctx = SampleCtx {
+                scene: &scene,
+                cam: &cam,
+                sampler: &cfg,
+                stream: 0,
+            };
             let mut c = Counters::default();
             let mut nonzero_f = 0;
             for y in 0..h {
                 for x in 0..w {
                     for k in 0..4 {
-                        let s0 = SampleStream::new(&cfg, 0, y * w + x, k);
-                        let whole =
-                            it.sample::<3>(&scene, &cam, x, y, &mut s0.clone(), &mut sink, &mut c);
-                        let (t, f) =
-                            it.sample_split::<3>(&scene, &cam, x, y, &mut s0.clone(), &mut c);
-                        let v = [whole, t, f];
+                        let cs = CameraSample {
+                            x,
+                            y,
+                            pixel: y * w + x,
+                            index: k,
+                        };
+                        let mut whole = Last(Layer::None, [[0.0; 3]; 2]);
+                        it.sample::<3>(&ctx, [cs], &mut whole, &mut c);
+                        let mut split = Last(Layer::Visible, [[0.0; 3]; 2]);
+                        it.sample::<3>(&ctx, [cs], &mut split, &mut c);
+                        let [l, f] = split.1;
+                        let t = [l[0] - f[0], l[1] - f[1], l[2] - f[2]];
+                        let v = [whole.1[0], t, f];
                         for ch in 0..3 {
                             let sum = v[1][ch] + v[2][ch];
                             assert!(

@@ -1,16 +1,16 @@
-//! The one pixel loop: sample passes over the film, pixels in parallel by rows (rayon),
-//! each camera sample evaluated by `Integrator::sample`. Each sample's random numbers are
+//! The one pixel loop (`each_row`): rows in parallel (rayon), each row's camera samples
+//! evaluated by `Integrator::sample` into the row's sink: the film's `film::RowSink` for
+//! sample passes, the strategy images' own (`strategies`). Each sample's random numbers are
 //! a pure function of (seed, stream, pixel, sample index) and the film's sums are exact,
 //! so the image is bit-identical for any thread count. Splats are collected per row and
 //! added to the film after the pass, in row order.
 
-use crate::film::{Film, PixelStats, Rejections};
-use crate::integrator::path::BATCH_PATHS;
-use crate::integrator::{Counters, Integrator, IntegratorSettings, Splat, SplatSink};
+use crate::film::{Film, PixelStats, RowOut, RowSink, Sink, Splats};
+use crate::integrator::{CameraSample, Counters, Integrator, IntegratorSettings, SampleCtx};
 use crate::progress::Progress;
 use crate::sampling::{SampleStream, SamplerConfig};
 use crate::scene::{Camera, CameraDesc, Scene};
-use crate::spectrum::SpectralMode;
+use crate::spectrum::{per_band, SpectralMode};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -73,15 +73,11 @@ pub fn render_pass(p: &Pass, film: &mut Film, rays: Option<&mut [u64]>) -> Count
     if p.integrator.splats() {
         film.ensure_splats();
     }
-    match p.set.spectral {
-        SpectralMode::Rgb => pass::<3>(p, film, None, None, rays),
-        SpectralMode::Bands8 => pass::<8>(p, film, None, None, rays),
-        SpectralMode::Bands16 => pass::<16>(p, film, None, None, rays),
-    }
+    per_band!(p.set.spectral, pass(p, film, None, None, rays))
 }
 
 /// [`render_pass`] of an estimator that [`Integrator::splits_direct`] (BDPT), which also
-/// writes each camera sample less its emission seen directly (`Integrator::sample_direct`)
+/// writes each camera sample less its emission seen directly (the sink's `Layer::Direct`)
 /// to `rest`: the same samples' indices and batches, no splats (its `light_paths` stays
 /// 0, so read its `pixels` and batch sums, not its `value`). `film` gets the whole
 /// samples and the splats as [`render_pass`] gives them, so the two films hold per pixel
@@ -100,14 +96,10 @@ pub fn render_pass_rest(
     assert_eq!(film.pixels.len(), rest.pixels.len(), "films of one size");
     film.ensure_splats();
     rest.ensure_splats();
-    match p.set.spectral {
-        SpectralMode::Rgb => pass::<3>(p, film, None, Some(rest), rays),
-        SpectralMode::Bands8 => pass::<8>(p, film, None, Some(rest), rays),
-        SpectralMode::Bands16 => pass::<16>(p, film, None, Some(rest), rays),
-    }
+    per_band!(p.set.spectral, pass(p, film, None, Some(rest), rays))
 }
 
-/// A pass whose samples are split (`Integrator::sample_split`, for `--method rw`): the
+/// A pass whose samples are split (the sink's `Layer::Visible`, for `--method rw`): the
 /// transport L - f(ray) to `film`, the light seen directly f(ray) to `visible`, from one
 /// evaluation of each sample. A sample rejected in either part is left out of both.
 pub fn render_pass_split(p: &Pass, film: &mut Film, visible: &mut Film) -> Counters {
@@ -116,26 +108,59 @@ pub fn render_pass_split(p: &Pass, film: &mut Film, visible: &mut Film) -> Count
         "split passes are for estimators that do not splat"
     );
     assert_eq!(film.pixels.len(), visible.pixels.len(), "films of one size");
-    match p.set.spectral {
-        SpectralMode::Rgb => pass::<3>(p, film, Some(visible), None, None),
-        SpectralMode::Bands8 => pass::<8>(p, film, Some(visible), None, None),
-        SpectralMode::Bands16 => pass::<16>(p, film, Some(visible), None, None),
-    }
+    per_band!(p.set.spectral, pass(p, film, Some(visible), None, None))
 }
 
-/// What one row gives back besides the pixels it wrote.
-#[derive(Default)]
-struct RowOut {
-    counters: Counters,
-    rejected: Rejections,
-    /// For splatting estimators: the row's camera samples (pixel, index, value), then
-    /// its splats, added to the film in row order after the pass.
-    samples: Vec<Splat>,
-    /// With a rest film: the same samples less their light seen directly.
-    rest: Vec<Splat>,
-    sink: SplatSink,
+/// The one pixel loop: the rows of a pass in parallel (rayon), each row's camera samples
+/// (in pixel order, then sample index) evaluated by `Integrator::sample` into that row's
+/// sink (`sinks`: one per row, top to bottom). Returns each row's counters and sink in row
+/// order; a row not yet started when the render is cancelled is left as it was.
+pub fn each_row<const N: usize, S: Sink + Send>(
+    p: &Pass,
+    sinks: impl IndexedParallelIterator<Item = S>,
+) -> Vec<(Counters, S)> {
+    let set = p.set;
+    let cam = Camera::new(set.camera, set.width, set.height);
+    let ctx = SampleCtx {
+        scene: p.scene,
+        cam: &cam,
+        sampler: &set.sampler,
+        stream: p.stream,
+    };
+    let w = set.width;
+    sinks
+        .enumerate()
+        .map(|(y, mut sink)| {
+            let mut counters = Counters::default();
+            if p.progress.cancelled() {
+                return (counters, sink);
+            }
+            let y = y as u32;
+            let samples = (0..w).flat_map(|x| {
+                let pixel = y * w + x;
+                let n = p.counts.get(pixel as usize);
+                (0..n).map(move |k| CameraSample {
+                    x,
+                    y,
+                    pixel,
+                    index: p.first_index + k as u64,
+                })
+            });
+            p.integrator
+                .sample::<N>(&ctx, samples, &mut sink, &mut counters);
+            let done: u64 = (0..w)
+                .map(|x| p.counts.get((y * w + x) as usize) as u64)
+                .sum();
+            p.progress.advance(done);
+            (counters, sink)
+        })
+        .collect()
 }
 
+/// A pass over the film: each row's sink is the film's (`film::RowSink`: the row's
+/// pixels, or buffers when splatting; with `visible`, the light seen directly into its
+/// row; with `rest`, the samples less their emission seen directly; with `rays`, each
+/// pixel's rays), added to the film in row order after the pass.
 fn pass<const N: usize>(
     p: &Pass,
     film: &mut Film,
@@ -143,140 +168,11 @@ fn pass<const N: usize>(
     mut rest: Option<&mut Film>,
     rays: Option<&mut [u64]>,
 ) -> Counters {
-    let set = p.set;
-    let split_rest = rest.is_some();
-    let cam = Camera::new(set.camera, set.width, set.height);
+    let (width, height) = (p.set.width, p.set.height);
+    let direct = rest.is_some();
     let w = film.width as usize;
     let h = film.pixels.len() / w.max(1);
     let splatting = film.splats.is_some();
-    // The path tracer's samples in batches (`Integrator::sample_batch`).
-    let batched = !splatting && p.integrator.batches();
-    // One row: its samples into its pixels (or, when splatting, into the row's list; when
-    // split, the light seen directly into the visible film's row), and (if asked) each
-    // pixel's rays.
-    let row = |y: usize,
-               row: &mut [PixelStats],
-               mut vis_row: Option<&mut [PixelStats]>,
-               mut row_rays: Option<&mut [u64]>| {
-        let mut out = RowOut {
-            sink: SplatSink::new(set.width, set.height),
-            ..Default::default()
-        };
-        if p.progress.cancelled() {
-            return out;
-        }
-        let c = &mut out.counters;
-        let mut done = 0u64;
-        if batched && vis_row.is_none() && row_rays.is_none() && !split_rest {
-            // The row's samples in order, a batch of paths at a time (the same values,
-            // pushed in the same order, as one at a time). A pass that counts each pixel's
-            // rays takes them one at a time: `tests/determinism.rs` renders such a pass as
-            // its reference for the batches.
-            let jobs: Vec<(u32, u32)> = (0..w)
-                .flat_map(|x| (0..p.counts.get(y * w + x)).map(move |k| (x as u32, k)))
-                .collect();
-            let mut pixels = [(0u32, y as u32); BATCH_PATHS];
-            let mut vals = [[0.0f32; 3]; BATCH_PATHS];
-            let mut streams = Vec::with_capacity(BATCH_PATHS);
-            for chunk in jobs.chunks(BATCH_PATHS) {
-                streams.clear();
-                streams.extend(chunk.iter().map(|&(x, k)| {
-                    let pixel = (y * w + x as usize) as u32;
-                    SampleStream::new(&set.sampler, p.stream, pixel, p.first_index + k as u64)
-                }));
-                for (px, &(x, _)) in pixels.iter_mut().zip(chunk) {
-                    px.0 = x;
-                }
-                let n = chunk.len();
-                p.integrator.sample_batch::<N>(
-                    p.scene,
-                    &cam,
-                    &pixels[..n],
-                    &mut streams,
-                    c,
-                    &mut vals[..n],
-                );
-                for (&(x, _), v) in chunk.iter().zip(&vals[..n]) {
-                    if out.rejected.check(v) {
-                        row[x as usize].push(*v);
-                    }
-                }
-            }
-            p.progress.advance(jobs.len() as u64);
-            return out;
-        }
-        for (x, px) in row.iter_mut().enumerate() {
-            let pixel = y * w + x;
-            let rays_before = c.rays;
-            let k_n = p.counts.get(pixel);
-            for k in 0..k_n {
-                let index = p.first_index + k as u64;
-                let mut s = SampleStream::new(&set.sampler, p.stream, pixel as u32, index);
-                // (a splat's batch: the index's low bits are enough)
-                let batch = index as u32;
-                out.sink.index = batch;
-                if let Some(vr) = vis_row.as_deref_mut() {
-                    let (v, f) = p
-                        .integrator
-                        .sample_split::<N>(p.scene, &cam, x as u32, y as u32, &mut s, c);
-                    let mut r = Rejections::default();
-                    if r.check(&v) && r.check(&f) {
-                        px.push(v);
-                        vr[x].push(f);
-                    }
-                    out.rejected.add(&r);
-                    continue;
-                }
-                if split_rest {
-                    let (v, f) = p.integrator.sample_direct::<N>(
-                        p.scene,
-                        &cam,
-                        x as u32,
-                        y as u32,
-                        &mut s,
-                        &mut out.sink,
-                        c,
-                    );
-                    let pixel = pixel as u32;
-                    out.samples.push(Splat {
-                        pixel,
-                        index: batch,
-                        rgb: v,
-                    });
-                    out.rest.push(Splat {
-                        pixel,
-                        index: batch,
-                        rgb: [v[0] - f[0], v[1] - f[1], v[2] - f[2]],
-                    });
-                    continue;
-                }
-                let v = p.integrator.sample::<N>(
-                    p.scene,
-                    &cam,
-                    x as u32,
-                    y as u32,
-                    &mut s,
-                    &mut out.sink,
-                    c,
-                );
-                if splatting {
-                    out.samples.push(Splat {
-                        pixel: pixel as u32,
-                        index: batch,
-                        rgb: v,
-                    });
-                } else if out.rejected.check(&v) {
-                    px.push(v);
-                }
-            }
-            done += k_n as u64;
-            if let Some(r) = row_rays.as_deref_mut() {
-                r[x] += c.rays - rays_before;
-            }
-        }
-        p.progress.advance(done);
-        out
-    };
     // each row's share of the optional outputs, as one list per output
     let vis_rows: Vec<Option<&mut [PixelStats]>> = match visible {
         Some(v) => v.pixels.chunks_mut(w).map(Some).collect(),
@@ -286,38 +182,23 @@ fn pass<const N: usize>(
         Some(r) => r.chunks_mut(w).map(Some).collect(),
         None => (0..h).map(|_| None).collect(),
     };
-    let outs: Vec<RowOut> = film
+    let sinks = film
         .pixels
         .par_chunks_mut(w)
         .zip(vis_rows)
         .zip(ray_rows)
         .enumerate()
-        .map(|(y, ((px, vr), rr))| row(y, px, vr, rr))
+        .map(|(y, ((px, vr), rr))| {
+            RowSink::new(width, height, y as u32, px, vr, rr, direct, splatting)
+        });
+    let outs: Vec<(Counters, RowOut)> = each_row::<N, _>(p, sinks)
+        .into_iter()
+        .map(|(c, sink)| (c, sink.out))
         .collect();
     let mut counters = Counters::default();
-    for o in outs {
-        counters.add(&o.counters);
-        film.rejected.add(&o.rejected);
-        for (k, sm) in o.samples.iter().enumerate() {
-            // With a rest film a sample goes to both films or, if either value is not
-            // finite, to neither (the whole film counts the rejection).
-            if let Some(r) = rest.as_deref_mut() {
-                let rv = &o.rest[k];
-                let mut j = Rejections::default();
-                if j.check(&sm.rgb) && j.check(&rv.rgb) {
-                    film.add_sample(sm.pixel as usize, sm.index, sm.rgb);
-                    r.add_sample(rv.pixel as usize, rv.index, rv.rgb);
-                } else {
-                    film.rejected.add(&j);
-                }
-            } else {
-                film.add_sample(sm.pixel as usize, sm.index, sm.rgb);
-            }
-            if let Some(sf) = film.splats.as_mut() {
-                sf.add_light_path(sm.index);
-            }
-        }
-        add_splats(film, &o.sink.splats);
+    for (c, o) in outs {
+        counters.add(&c);
+        film.add_row(&o, rest.as_deref_mut());
     }
     counters
 }
@@ -345,17 +226,10 @@ pub fn render_light_pass(
     let mut a = first;
     while a < first + count {
         let k = LIGHT_PASS_MAX.min(first + count - a);
-        let c = match set.spectral {
-            SpectralMode::Rgb => {
-                light_pass::<3>(scene, integrator, set, stream, a, k, film, progress)
-            }
-            SpectralMode::Bands8 => {
-                light_pass::<8>(scene, integrator, set, stream, a, k, film, progress)
-            }
-            SpectralMode::Bands16 => {
-                light_pass::<16>(scene, integrator, set, stream, a, k, film, progress)
-            }
-        };
+        let c = per_band!(
+            set.spectral,
+            light_pass(scene, integrator, set, stream, a, k, film, progress)
+        );
         counters.add(&c);
         if progress.cancelled() {
             break;
@@ -383,17 +257,23 @@ fn light_pass<const N: usize>(
     progress: &dyn Progress,
 ) -> Counters {
     let cam = Camera::new(set.camera, set.width, set.height);
+    let ctx = SampleCtx {
+        scene,
+        cam: &cam,
+        sampler: &set.sampler,
+        stream,
+    };
     let pixels = film.pixels.len() as u64;
     // the batch key of path m: m itself as far as it matters (m mod B)
     let key = |m: u64| (m % (1u64 << 30)) as u32;
     let chunks = count.div_ceil(LIGHT_CHUNK);
     // per chunk: its counters, its splats and the paths it traced (none if the render
     // was cancelled before it started)
-    let outs: Vec<(Counters, SplatSink, u64)> = (0..chunks)
+    let outs: Vec<(Counters, Splats, u64)> = (0..chunks)
         .into_par_iter()
         .map(|ch| {
             let mut c = Counters::default();
-            let mut sink = SplatSink::new(set.width, set.height);
+            let mut sink = Splats::new(set.width, set.height);
             if progress.cancelled() {
                 return (c, sink, 0);
             }
@@ -402,8 +282,7 @@ fn light_pass<const N: usize>(
             for m in a..b {
                 let mut s =
                     SampleStream::new(&set.sampler, stream, (m % pixels) as u32, m / pixels);
-                sink.index = key(m);
-                integrator.light_sample::<N>(scene, &cam, &mut s, &mut sink, &mut c);
+                integrator.light_sample::<N>(&ctx, &mut s, key(m) as u64, &mut sink, &mut c);
             }
             (c, sink, b - a)
         })
@@ -417,23 +296,9 @@ fn light_pass<const N: usize>(
                 sf.add_light_path(key(m));
             }
         }
-        add_splats(film, &sink.splats);
+        film.add_splats(&sink.splats);
     }
     counters
-}
-
-/// Adds splats to the film's splat image; non-finite ones are rejected and counted.
-fn add_splats(film: &mut Film, splats: &[Splat]) {
-    for sp in splats {
-        let mut r = Rejections::default();
-        if r.check(&sp.rgb) {
-            if let Some(sf) = film.splats.as_mut() {
-                sf.add_splat(sp.pixel as usize, sp.index, sp.rgb);
-            }
-        } else {
-            film.rejected.add(&r);
-        }
-    }
 }
 
 /// How much work a plain render does.

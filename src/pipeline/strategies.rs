@@ -4,21 +4,21 @@
 //! adds to the render) and unweighted (C*_{s,t}: an estimate of the whole light of that
 //! path length, by that strategy alone).
 //!
-//! A pass over the pixels calls `bdpt::sample_pixel_with` with a callback. Camera-side
-//! strategies (t >= 2) add to their own pixel, light tracing (t = 1) to the pixel its
-//! splat lands in; every image is the sum divided by the samples per pixel (one light
+//! A pass of the one pixel loop (`render::each_row`) with a sink that reads the strategies
+//! (`film::Sink::strategy`). Camera-side strategies (t >= 2) add to their own pixel, light
+//! tracing (t = 1) to the pixel its splat lands in; every image is the sum divided by the samples per pixel (one light
 //! subpath per camera sample, as in the render). Rows run in parallel, each keeping its own
 //! sums and its list of splats; rows are reduced in row order, so the images are the same
 //! bits for any thread count. The random streams are the render's (stream 0, sample indices
 //! `first..first + spp`), so the weighted images of every path length sum to the render.
 
-use crate::integrator::bdpt::{self, BdptOptions, StrategySample};
-use crate::integrator::{Counters, IntegratorKind};
+use crate::film::{raster_pixel, Sink, StrategySample};
+use crate::integrator::{Integrator, IntegratorKind};
+use crate::math::Vec2;
+use crate::pipeline::render::{each_row, Counts, Pass, RenderSettings};
 use crate::progress::Progress;
-use crate::render::RenderJob;
-use crate::sampling::SampleStream;
-use crate::scene::{Camera, Scene};
-use crate::spectrum::SpectralMode;
+use crate::scene::Scene;
+use crate::spectrum::per_band;
 use rayon::prelude::*;
 
 /// The default bound on the path length (segments, Mitsuba's depth) of the images.
@@ -69,33 +69,33 @@ fn slot(s: u32, t: u32, max_length: u32) -> Option<usize> {
     Some((before + within) as usize)
 }
 
-/// Render the strategy images of `job` (an `--integrator bdpt` job, plain method) for the
-/// path lengths up to `max_length` (and the job's --max-depth, if smaller).
-pub fn render_strategies(
-    scene: &Scene,
-    job: &RenderJob,
-    max_length: u32,
-    progress: &dyn Progress,
-) -> Result<Vec<StrategyImage>, String> {
-    let kind = job.integrator_for(scene);
+/// Refuses an estimator other than BDPT.
+pub fn check_estimator(kind: IntegratorKind) -> Result<(), String> {
     if kind != IntegratorKind::Bdpt {
         return Err(format!(
             "--bdpt-strategies: the strategy images are BDPT's; add --integrator bdpt (not {})",
             crate::options::name(&kind)
         ));
     }
-    job.validate()?;
-    let set = job.settings(scene);
-    crate::film::check_resolution(set.width, set.height)?;
-    let spp = match (job.spp, job.time) {
-        (Some(n), _) => n,
-        (None, None) => scene.defaults.spp.unwrap_or(crate::render::DEFAULT_SPP),
-        (None, Some(_)) => {
-            return Err("--bdpt-strategies: give --spp (the strategy images are a fixed number of samples, not --time)".into())
-        }
-    };
-    // Checks the integrator settings as the render does (e.g. --rr off with no depth).
-    crate::integrator::Integrator::prepare(
+    Ok(())
+}
+
+/// The strategy images of a BDPT render with settings `set` (checked as the render checks
+/// them), sample indices `first..first + spp`, for the path lengths up to `max_length`
+/// (and the settings' --max-depth, if smaller); rows in parallel on the current thread pool.
+/// `render::render_strategies` is the job's front door.
+pub fn render_strategies(
+    scene: &Scene,
+    set: &RenderSettings,
+    first: u64,
+    spp: u32,
+    max_length: u32,
+    progress: &dyn Progress,
+) -> Result<Vec<StrategyImage>, String> {
+    check_estimator(set.integrator.kind)?;
+    // The render's estimator (its settings checked as the render does, e.g. --rr off
+    // with no depth): BDPT with every strategy, one light subpath per camera sample.
+    let integrator = Integrator::prepare(
         scene,
         set.integrator,
         set.spectral.bands(),
@@ -105,28 +105,18 @@ pub fn render_strategies(
         d if d >= 0 => max_length.min(d as u32),
         _ => max_length,
     };
-    let (pool, _) = crate::render::thread_pool(job.threads)?;
-    let opts = BdptOptions {
-        heuristic: set.integrator.mis,
-        ..Default::default()
-    };
     let list = strategy_list(max_len);
-    let args = Args {
+    let pass = Pass {
         scene,
-        set: &set,
-        opts: &opts,
-        first: job.first_sample,
-        spp,
-        max_len,
-        slots: list.len(),
+        integrator: &integrator,
+        set,
+        counts: Counts::Uniform(spp),
+        first_index: first,
+        stream: 0,
         progress,
     };
     progress.begin("samples", set.width as u64 * set.height as u64 * spp as u64);
-    let sums = pool.install(|| match set.spectral {
-        SpectralMode::Rgb => pass::<3>(&args),
-        SpectralMode::Bands8 => pass::<8>(&args),
-        SpectralMode::Bands16 => pass::<16>(&args),
-    });
+    let sums = per_band!(set.spectral, pass_sums(&pass, max_len, list.len()));
     progress.finish();
     if progress.cancelled() {
         return Err("--bdpt-strategies: interrupted, no strategy images written".into());
@@ -150,78 +140,59 @@ pub fn render_strategies(
         .collect())
 }
 
-struct Args<'a> {
-    scene: &'a Scene,
-    set: &'a crate::pipeline::RenderSettings,
-    opts: &'a BdptOptions,
-    first: u64,
-    spp: u32,
-    max_len: u32,
-    slots: usize,
-    progress: &'a dyn Progress,
-}
-
 /// Per pixel, per strategy: [weighted, unweighted] RGB sums.
 type Sums = Vec<[[f64; 3]; 2]>;
 
-/// A row's output: each pixel's own sums, and its splats (pixel, strategy slot, sample).
-type RowOut = (Vec<Sums>, Vec<(usize, usize, StrategySample)>);
+/// A row's sink: each pixel's own sums (camera-side strategies), and the light-tracing
+/// strategies' contributions (pixel, strategy slot, sample), added after all rows.
+struct RowStrategies {
+    width: u32,
+    height: u32,
+    start: u32,
+    max_len: u32,
+    own: Vec<Sums>,
+    splats: Vec<(usize, usize, StrategySample)>,
+}
 
-fn pass<const N: usize>(a: &Args) -> Vec<Sums> {
-    let set = a.set;
-    let (w, h) = (set.width as usize, set.height as usize);
-    let cam = Camera::new(set.camera, set.width, set.height);
-    let rows: Vec<RowOut> = (0..h)
-        .into_par_iter()
-        .map(|y| {
-            let mut own: Vec<Sums> = vec![vec![[[0.0; 3]; 2]; a.slots]; w];
-            let mut splats: Vec<(usize, usize, StrategySample)> = Vec::new();
-            if a.progress.cancelled() {
-                return (own, splats);
+impl Sink for RowStrategies {
+    fn wants_strategies(&self) -> bool {
+        true
+    }
+    fn sample(&mut self, _: u32, _: u64, _: [f32; 3], _: [f32; 3]) {}
+    fn splat(&mut self, _: u64, _: Vec2, _: [f32; 3]) {}
+    fn strategy(&mut self, pixel: u32, ss: &StrategySample) {
+        let Some(j) = slot(ss.s, ss.t, self.max_len) else {
+            return;
+        };
+        if ss.t == 1 {
+            if let Some(p) = raster_pixel(ss.raster, self.width, self.height) {
+                self.splats.push((p as usize, j, *ss));
             }
-            let mut c = Counters::default();
-            for (x, own_x) in own.iter_mut().enumerate() {
-                let pixel = y * w + x;
-                for k in 0..a.spp {
-                    let mut st =
-                        SampleStream::new(&set.sampler, 0, pixel as u32, a.first + k as u64);
-                    let mut cb = |ss: StrategySample| {
-                        let Some(j) = slot(ss.s, ss.t, a.max_len) else {
-                            return;
-                        };
-                        if ss.t == 1 {
-                            let (px, py) = (ss.raster.x, ss.raster.y);
-                            if px >= 0.0 && py >= 0.0 && (px as usize) < w && (py as usize) < h {
-                                splats.push((py as usize * w + px as usize, j, ss));
-                            }
-                        } else {
-                            add(&mut own_x[j], &ss);
-                        }
-                    };
-                    bdpt::sample_pixel_with::<N>(
-                        a.scene,
-                        &cam,
-                        x as u32,
-                        y as u32,
-                        &mut st,
-                        &set.integrator,
-                        a.opts,
-                        &mut c,
-                        &mut |_, _| {},
-                        Some(&mut cb),
-                    );
-                }
-            }
-            a.progress.advance(w as u64 * a.spp as u64);
-            (own, splats)
-        })
-        .collect();
+        } else {
+            add(&mut self.own[(pixel - self.start) as usize][j], ss);
+        }
+    }
+}
+
+/// Each pixel's sums over the pass `p` (strategy slots of the lengths up to `max_len`).
+fn pass_sums<const N: usize>(p: &Pass, max_len: u32, slots: usize) -> Vec<Sums> {
+    let (width, height) = (p.set.width, p.set.height);
+    let (w, h) = (width as usize, height as usize);
+    let sinks = (0..height).into_par_iter().map(|y| RowStrategies {
+        width,
+        height,
+        start: y * width,
+        max_len,
+        own: vec![vec![[[0.0; 3]; 2]; slots]; w],
+        splats: Vec::new(),
+    });
+    let rows = each_row::<N, _>(p, sinks);
     // Reduce in row order: the same additions in the same order on any thread count.
     let mut sums: Vec<Sums> = Vec::with_capacity(w * h);
     let mut all_splats = Vec::new();
-    for (own, splats) in rows {
-        sums.extend(own);
-        all_splats.push(splats);
+    for (_, r) in rows {
+        sums.extend(r.own);
+        all_splats.push(r.splats);
     }
     for splats in all_splats {
         for (p, j, ss) in splats {
@@ -242,7 +213,6 @@ fn add(acc: &mut [[f64; 3]; 2], ss: &StrategySample) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::Silent;
 
     #[test]
     fn slots_follow_the_list() {
@@ -253,53 +223,5 @@ mod tests {
         assert_eq!(slot(1, 1, 5), None);
         assert_eq!(slot(3, 4, 5), None); // length 6
         assert_eq!(list.len(), 1 + 3 + 4 + 5 + 6);
-    }
-
-    fn job() -> RenderJob {
-        let mut j = RenderJob::new("cornell");
-        j.integrator = Some(IntegratorKind::Bdpt);
-        j.res = Some((12, 10));
-        j.spp = Some(4);
-        j.max_depth = Some(3);
-        j
-    }
-
-    /// The weighted images of every length sum to the render's image (same streams, all
-    /// lengths within --max-depth), and the result does not depend on the thread count.
-    #[test]
-    fn weighted_strategies_sum_to_the_render_on_any_thread_count() {
-        let scene = crate::scene::load("cornell").unwrap();
-        let mut j = job();
-        j.threads = Some(1);
-        let one = render_strategies(&scene, &j, 8, &Silent).unwrap();
-        j.threads = Some(3);
-        let three = render_strategies(&scene, &j, 8, &Silent).unwrap();
-        assert_eq!(one, three);
-        assert_eq!(one.len(), strategy_list(3).len());
-        let r = crate::render::render_scene(&scene, &j, &Silent).unwrap();
-        let mut worst = 0.0f64;
-        for i in 0..120 {
-            let v = r.film.value(i);
-            for (c, &vc) in v.iter().enumerate() {
-                let sum: f64 = one.iter().map(|im| im.weighted[i][c] as f64).sum();
-                worst = worst.max((sum - vc).abs() / vc.abs().max(1e-3));
-            }
-        }
-        assert!(
-            worst < 1e-4,
-            "weighted strategies vs render: relative {worst}"
-        );
-        // (0, 2) is the emitters seen directly: the light's pixels only, same both ways.
-        let direct = one.iter().find(|im| (im.s, im.t) == (0, 2)).unwrap();
-        assert_eq!(direct.weighted, direct.unweighted);
-    }
-
-    #[test]
-    fn refused_without_bdpt() {
-        let scene = crate::scene::load("cornell").unwrap();
-        let mut j = job();
-        j.integrator = Some(IntegratorKind::Path);
-        let e = render_strategies(&scene, &j, 4, &Silent).unwrap_err();
-        assert!(e.contains("--integrator bdpt"), "{e}");
     }
 }

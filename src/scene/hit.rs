@@ -9,7 +9,7 @@
 
 use super::Scene;
 use crate::accel::{prefetch_line, Hit, RayAnswer, RayQuery};
-use crate::math::{offset_origin, Ray, Vec2, Vec3};
+use crate::math::{offset_origin, Frame, Ray, Vec2, Vec3};
 
 /// Cut-out surfaces a ray crosses at most; beyond, it is taken to pass (a bound on the
 /// work of a pathological stack of layers).
@@ -42,6 +42,46 @@ pub struct SurfaceHit {
     pub b2: f32,
     pub prim: u32,
     pub t: f32,
+}
+
+/// The local shading frame at a surface point (normal = +z), with the geometric and
+/// shading normals it was built from: the one place where an estimator turns a hit's
+/// normals towards the side it is seen from (opaque BSDFs are two-sided) and builds the
+/// frame its BSDF is evaluated in.
+#[derive(Clone, Copy, Debug)]
+pub struct Shading {
+    pub ng: Vec3,
+    pub ns: Vec3,
+    pub frame: Frame,
+}
+
+impl Shading {
+    /// The normals as given, or both flipped when `flip` (a two-sided BSDF seen from
+    /// behind), and the frame around the shading normal.
+    #[inline(always)]
+    pub fn new(ng: Vec3, ns: Vec3, flip: bool) -> Shading {
+        let (ng, ns) = if flip { (-ng, -ns) } else { (ng, ns) };
+        Shading {
+            ng,
+            ns,
+            frame: Frame::from_normal(ns),
+        }
+    }
+
+    /// [`Shading::new`] facing `w` for a two-sided BSDF: flipped when `w` is behind the
+    /// geometric normal `ng`.
+    #[inline(always)]
+    pub fn toward(ng: Vec3, ns: Vec3, w: Vec3, two_sided: bool) -> Shading {
+        Shading::new(ng, ns, two_sided && w.dot(ng) < 0.0)
+    }
+}
+
+impl SurfaceHit {
+    /// The hit's [`Shading`] facing `wo` for a two-sided BSDF.
+    #[inline(always)]
+    pub fn shading(&self, wo: Vec3, two_sided: bool) -> Shading {
+        Shading::toward(self.ng, self.ns, wo, two_sided)
+    }
 }
 
 impl Scene {

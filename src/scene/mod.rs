@@ -14,7 +14,7 @@ pub mod toml_scene;
 pub mod tri_attr;
 
 pub use camera::{Camera, CameraDesc, FovAxis};
-pub use hit::SurfaceHit;
+pub use hit::{Shading, SurfaceHit};
 pub use texture::Texture;
 
 use crate::accel::Bvh;

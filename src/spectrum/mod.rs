@@ -235,6 +235,20 @@ pub enum SpectralMode {
     Bands16,
 }
 
+/// `f::<N>(args)` with N the band count of a [`SpectralMode`]: the one place where the
+/// run-time mode becomes the compile-time number of bands (`Spectrum<N>`). `f` is a
+/// function in scope generic over `const N: usize` first.
+macro_rules! per_band {
+    ($mode:expr, $f:ident($($arg:expr),* $(,)?)) => {
+        match $mode {
+            $crate::spectrum::SpectralMode::Rgb => $f::<3>($($arg),*),
+            $crate::spectrum::SpectralMode::Bands8 => $f::<8>($($arg),*),
+            $crate::spectrum::SpectralMode::Bands16 => $f::<16>($($arg),*),
+        }
+    };
+}
+pub(crate) use per_band;
+
 impl SpectralMode {
     pub fn bands(self) -> usize {
         match self {
