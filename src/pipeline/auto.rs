@@ -77,7 +77,7 @@ impl Pilot {
 /// The pilot's settings: the render's at a quarter of the resolution, with estimator
 /// `kind` and a seed of its own.
 fn pilot_settings(set: &RenderSettings, kind: IntegratorKind) -> RenderSettings {
-    let mut p = set.clone();
+    let mut p = *set;
     p.width = (set.width / PILOT_SCALE).max(PILOT_MIN_SIDE.min(set.width));
     p.height = (set.height / PILOT_SCALE).max(PILOT_MIN_SIDE.min(set.height));
     p.integrator.kind = kind;
