@@ -175,7 +175,9 @@ impl RenderJob {
         RenderSettings {
             width,
             height,
-            camera: self.camera.unwrap_or(scene.camera),
+            camera: self
+                .camera
+                .map_or(scene.camera, |c| c.on_film_of(&scene.camera)),
             spectral: self.spectral,
             sampler: SamplerConfig {
                 kind: self.sampler,
@@ -395,6 +397,9 @@ pub fn render_scene(
     }
     let (pool, thread_warning) = thread_pool(job.threads)?;
     let mut warnings: Vec<String> = thread_warning.into_iter().collect();
+    if job.integrator_for(scene) == IntegratorKind::Bdpt {
+        warnings.extend(set.camera.for_light_paths()?);
+    }
     let t_prep = std::time::Instant::now();
     // Say what a large render will cost before it starts.
     let pixels = set.width as u64 * set.height as u64;

@@ -50,6 +50,7 @@ mod spectra;
 #[cfg(test)]
 mod tests;
 
+use super::camera::{PixelFilter, Projection};
 use super::{
     CameraDesc, EnvironmentDesc, FovAxis, MaterialDesc, PointLightDesc, PointLightShape, SceneDesc,
     SurfaceModel,
