@@ -99,6 +99,40 @@ impl<'a> Loader<'a> {
                 self.prop(el, k);
             }
         }
+        let (fov, fov_axis) = self.fov(el, w, h)?;
+        let xf = self.transform(el, "to_world")?;
+        let origin = xf.transform_point3(Vec3::ZERO);
+        let fwd = xf.transform_vector3(Vec3::Z).normalize_or_zero();
+        let up = xf.transform_vector3(Vec3::Y).normalize_or_zero();
+        if Mat3::from_mat4(xf).determinant() < 0.0 {
+            self.warn(
+                "mirrored sensor",
+                format!(
+                    "{}: the sensor's to_world mirrors the image (negative determinant): kalos renders it unmirrored",
+                    el.at
+                ),
+            );
+        }
+        let cam = CameraDesc {
+            origin: origin.into(),
+            target: (origin + fwd).into(),
+            up: up.into(),
+            fov,
+            fov_axis,
+            projection: Projection::Perspective,
+            filter,
+        };
+        cam.validate()
+            .map_err(|e| format!("{}: sensor: {e}", el.at))?;
+        self.desc.camera = Some(cam);
+        self.unused(el, &format!("sensor '{kind}'"));
+        Ok(())
+    }
+
+    /// A perspective field of view, as Mitsuba's `parse_fov` reads it: `fov` along
+    /// `fov_axis` (x by default), else `focal_length` (50mm by default) over a `w` x `h`
+    /// image's horizontal extent.
+    pub(super) fn fov(&mut self, el: &'a El, w: u32, h: u32) -> R<(f32, FovAxis)> {
         let axis = self.string(el, "fov_axis")?.unwrap_or_else(|| "x".into());
         let (fov, axis) = match (self.float(el, "fov")?, self.string(el, "focal_length")?) {
             (Some(f), _) => (f, axis),
@@ -130,33 +164,7 @@ impl<'a> Loader<'a> {
                 el.at
             )
         })?;
-        let xf = self.transform(el, "to_world")?;
-        let origin = xf.transform_point3(Vec3::ZERO);
-        let fwd = xf.transform_vector3(Vec3::Z).normalize_or_zero();
-        let up = xf.transform_vector3(Vec3::Y).normalize_or_zero();
-        if Mat3::from_mat4(xf).determinant() < 0.0 {
-            self.warn(
-                "mirrored sensor",
-                format!(
-                    "{}: the sensor's to_world mirrors the image (negative determinant): kalos renders it unmirrored",
-                    el.at
-                ),
-            );
-        }
-        let cam = CameraDesc {
-            origin: origin.into(),
-            target: (origin + fwd).into(),
-            up: up.into(),
-            fov,
-            fov_axis,
-            projection: Projection::Perspective,
-            filter,
-        };
-        cam.validate()
-            .map_err(|e| format!("{}: sensor: {e}", el.at))?;
-        self.desc.camera = Some(cam);
-        self.unused(el, &format!("sensor '{kind}'"));
-        Ok(())
+        Ok((fov, fov_axis))
     }
 
     /// An `<rfilter>`: box, tent (`radius`, 1 pixel) and Gaussian (`stddev`, 0.5 pixels)
