@@ -73,11 +73,9 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
         "test_orthographic_path",
         "checkerboard texture rendered as the mean of its colours (the orthographic extent agrees)",
     ),
-    ("test_projector_constant_direct", "projector emitter not read"),
-    ("test_projector_textured_direct", "projector emitter not read"),
     (
         "test_various_emitters_ptracer",
-        "projector emitter not read: its light is missing on the receiver",
+        "about 1% of pixel-channels off with the projector read (the particle tracer is rendered by the path tracer); not yet measured",
     ),
     (
         "test_various_shapes_path",
