@@ -181,7 +181,9 @@ impl RenderJob {
         RenderSettings {
             width,
             height,
-            camera: self.camera.unwrap_or(scene.camera),
+            camera: self
+                .camera
+                .map_or(scene.camera, |c| c.on_film_of(&scene.camera)),
             spectral: self.spectral,
             sampler: SamplerConfig {
                 kind: self.sampler,
@@ -425,8 +427,11 @@ pub fn choose_method(
     // (a candidate that cannot render with the job's other options is left out: BDPT
     // without a roulette or a depth; the path tracer's error, if it has one, is the job's)
     let mut pilots = vec![pipeline::auto::pilot(scene, set, IntegratorKind::Path)?];
-    if let Ok(p) = pipeline::auto::pilot(scene, set, IntegratorKind::Bdpt) {
-        pilots.push(p);
+    // (and BDPT with a camera its light paths cannot reach: an orthographic sensor)
+    if set.camera.for_light_paths().is_ok() {
+        if let Ok(p) = pipeline::auto::pilot(scene, set, IntegratorKind::Bdpt) {
+            pilots.push(p);
+        }
     }
     let (kind, why) = pipeline::auto::choose(&pilots);
     let chosen = pilots.iter().find(|p| p.kind == kind).expect("a candidate");
@@ -482,6 +487,9 @@ pub fn render_scene(
                 ));
             }
         }
+    }
+    if job.integrator_for(scene) == IntegratorKind::Bdpt {
+        warnings.extend(set.camera.for_light_paths()?);
     }
     // Say what a large render will cost before it starts.
     let pixels = set.width as u64 * set.height as u64;

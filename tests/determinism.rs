@@ -252,14 +252,23 @@ fn the_automatic_choice_is_the_same_on_any_thread_count() {
         job.threads = Some(threads);
         let r = kalos::render::render_scene(&scene, &job, &kalos::pipeline::Silent).unwrap();
         let stats = serde_json::to_value(&r.stats).unwrap();
-        (r.image.data, stats["method"].clone(), stats["method_choice"].clone())
+        (
+            r.image.data,
+            stats["method"].clone(),
+            stats["method_choice"].clone(),
+        )
     };
     let (one, three) = (go(1), go(3));
     assert_eq!(one.1, "dtf");
     assert!(
-        one.2.as_str().is_some_and(|s| s.starts_with("dtf over path; path: ")),
+        one.2
+            .as_str()
+            .is_some_and(|s| s.starts_with("dtf over path; path: ")),
         "{:?}",
         one.2
     );
-    assert!(one == three, "the automatic choice differs with thread count");
+    assert!(
+        one == three,
+        "the automatic choice differs with thread count"
+    );
 }

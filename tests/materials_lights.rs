@@ -24,6 +24,7 @@ fn camera() -> CameraDesc {
         up: [0.0, 1.0, 0.0],
         fov: 30.0,
         fov_axis: FovAxis::Y,
+        ..Default::default()
     }
 }
 
@@ -303,6 +304,7 @@ fn point_light_over_a_diffuse_plane() {
             up: [0.0, 1.0, 0.0],
             fov: 2.0,
             fov_axis: FovAxis::Y,
+            ..Default::default()
         }),
         point_lights: vec![PointLightDesc {
             position: Vec3::new(0.0, 0.0, 1.0),

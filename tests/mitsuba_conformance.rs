@@ -33,7 +33,10 @@ const VARIANCE_FLOOR: f64 = 1e-4;
 /// Scenes that do not pass yet, with the reason.
 const KNOWN_FAILURES: &[(&str, &str)] = &[
     ("test_bumpmap_path", "bumpmap: the nested BSDF is shaded without the bumps"),
-    ("test_constant_path", "0.6% of pixel-channels off since the masks render; not yet measured (Mitsuba's default Gaussian film filter, rendered as a box, is a candidate)"),
+    (
+        "test_constant_path",
+        "0.6% of pixel-channels off since the masks render; not the film filter (the file asks for a box)",
+    ),
     (
         "test_normalmap_identity_roughconductor_path",
         "normalmap and the anisotropic rough conductor (alpha_u 0.25, alpha_v 0.05) disagree",
@@ -45,11 +48,11 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     ),
     (
         "test_roughplastic_linear_path",
-        "about 0.5% of pixel-channels off since plastic's base is scaled once; not yet measured (the box filter in place of Mitsuba's default Gaussian is a candidate)",
+        "about 0.5% of pixel-channels off since plastic's base is scaled once; not the film filter (the file asks for a box)",
     ),
     (
         "test_roughplastic_nonlinear_path",
-        "about 0.5% of pixel-channels off since plastic's base is scaled once; not yet measured (the box filter in place of Mitsuba's default Gaussian is a candidate)",
+        "about 0.5% of pixel-channels off since plastic's base is scaled once; not the film filter (the file asks for a box)",
     ),
     (
         "test_textured_roughconductor_path",
@@ -66,16 +69,13 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     ("test_mesh_attributes_1_face_direct", "mesh_attribute texture and blendbsdf not read"),
     ("test_mesh_attributes_3_face_direct", "mesh_attribute texture (face colours) not read"),
     ("test_mesh_attributes_3_vertex_direct", "mesh_attribute texture (vertex colours) not read"),
-    ("test_orthographic_path", "orthographic sensor not read: kalos' default camera"),
-    ("test_projector_constant_direct", "projector emitter not read"),
-    ("test_projector_textured_direct", "projector emitter not read"),
     (
-        "test_texture_interp_direct",
-        "Mitsuba's default Gaussian film filter rendered as a box (to_uv, wrap_mode and filter_type are read)",
+        "test_orthographic_path",
+        "checkerboard texture rendered as the mean of its colours (the orthographic extent agrees)",
     ),
     (
         "test_various_emitters_ptracer",
-        "projector emitter not read: its light is missing on the receiver",
+        "about 1% of pixel-channels off with the projector read (the particle tracer is rendered by the path tracer); not yet measured",
     ),
     (
         "test_various_shapes_path",

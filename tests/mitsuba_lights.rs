@@ -1,5 +1,6 @@
-//! Mitsuba XML render set-up and lights, by known answers: `<path>` search folders and
-//! `-D` defines, a directional light's irradiance and a spot light's cone.
+//! Mitsuba XML render set-up, sensors and lights, by known answers: `<path>` search
+//! folders and `-D` defines, the film's reconstruction filter, the orthographic sensor's
+//! extent, a directional light's irradiance and a spot light's cone.
 
 use kalos::image_io::RgbImage;
 use kalos::pipeline::Silent;
@@ -17,6 +18,10 @@ fn temp_dir(name: &str) -> PathBuf {
 
 /// Render `xml` (written to a temporary file) as the file asks, at `spp`.
 fn render_xml(name: &str, xml: &str, spp: u32) -> RgbImage {
+    render_xml_threads(name, xml, spp, None)
+}
+
+fn render_xml_threads(name: &str, xml: &str, spp: u32, threads: Option<usize>) -> RgbImage {
     let d = temp_dir(name);
     let f = d.join("scene.xml");
     std::fs::write(&f, xml).unwrap();
@@ -24,7 +29,84 @@ fn render_xml(name: &str, xml: &str, spp: u32) -> RgbImage {
     let s = scene::load(spec).unwrap();
     let mut job = RenderJob::new(spec);
     job.spp = Some(spp);
+    job.threads = threads;
     kalos::render_scene(&s, &job, &Silent).unwrap().image
+}
+
+/// An orthographic sensor 40x20 pixels over world x in [-2, 2], y in [-1, 1] (0.1 per
+/// pixel), looking down -z at an emitting rectangle of radiance 1 over x in [0, 1],
+/// y in [-0.5, 0.5]: pixel columns 20..30 and rows 5..15 on the pixel grid.
+fn ortho_scene(rfilter: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+  <integrator type="direct"/>
+  <sensor type="orthographic">
+    <transform name="to_world"><scale x="2" y="2"/>
+      <lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="20"/>
+      {rfilter}</film>
+  </sensor>
+  <shape type="rectangle">
+    <transform name="to_world"><scale x="0.5" y="0.5"/><translate x="0.5"/></transform>
+    <emitter type="area"><rgb name="radiance" value="1"/></emitter>
+  </shape>
+</scene>"#
+    )
+}
+
+#[test]
+fn orthographic_sensor_extent() {
+    let img = render_xml("ortho", &ortho_scene(r#"<rfilter type="box"/>"#), 16);
+    for y in 0..20 {
+        for x in 0..40 {
+            let v = img.data[(y * 40 + x) as usize][1];
+            let lit = (20..30).contains(&x) && (5..15).contains(&y);
+            assert!(
+                (v - lit as u8 as f32).abs() < 1e-4,
+                "pixel ({x}, {y}) = {v}, expected {}",
+                lit as u8
+            );
+        }
+    }
+}
+
+/// Without <rfilter>, Mitsuba's Gaussian (stddev 0.5 pixels, cut at 2): the column whose
+/// centre lies half a pixel outside the rectangle's edge receives the filter's mass
+/// beyond one standard deviation, about 0.159; one and a half pixels out, 0.001. The image
+/// is the same on any number of threads.
+#[test]
+fn default_film_filter_is_mitsubas_gaussian() {
+    let w = |x: f64| ((-2.0 * x * x).exp() - (-8.0f64).exp()).max(0.0);
+    let integral = |lo: f64, hi: f64| {
+        let h = (hi - lo) / 20_000.0;
+        (0..20_000)
+            .map(|i| w(lo + (i as f64 + 0.5) * h) * h)
+            .sum::<f64>()
+    };
+    let mass = |a: f64| integral(a, 2.0) / integral(-2.0, 2.0);
+    let spp = 4096;
+    let img = render_xml_threads("gauss", &ortho_scene(""), spp, Some(1));
+    let col = |x: u32| {
+        (8..12)
+            .map(|y| img.data[(y * 40 + x) as usize][1] as f64)
+            .sum::<f64>()
+            / 4.0
+    };
+    for (x, d) in [(19, 0.5), (18, 1.5), (20, -0.5)] {
+        let want = if d > 0.0 { mass(d) } else { 1.0 - mass(-d) };
+        assert!(
+            (col(x) - want).abs() < 0.01,
+            "column {x}: {} where the Gaussian gives {want}",
+            col(x)
+        );
+    }
+    // a box would leave column 19 black
+    assert!(mass(0.5) > 0.15);
+    let three = render_xml_threads("gauss3", &ortho_scene(""), spp, Some(3));
+    assert!(
+        img.data == three.data,
+        "the image depends on the thread count"
+    );
 }
 
 /// A camera at `origin` looking at `target`, `n`x`n` pixels, the direct integrator.
@@ -172,4 +254,47 @@ fn spot_light_cone() {
         inside > 100 && outside > 100 && between > 4,
         "{inside} {outside} {between}"
     );
+}
+
+/// Mitsuba's projector 1 above a white diffuse floor, looking down with a 90 degree field
+/// of view (its frustum meets the floor over x, y in [-1, 1]): irradiance 0.5 at scale 2
+/// gives the floor pi E = pi, so its radiance is 1 everywhere inside and 0 outside. Seen
+/// by an orthographic sensor over [-2, 2]^2 (40x40 pixels): columns and rows 10..30.
+#[test]
+fn projector_irradiance_and_frustum() {
+    let xml = r#"<scene version="3.0.0">
+  <integrator type="direct"/>
+  <sensor type="orthographic">
+    <transform name="to_world"><scale x="2" y="2"/>
+      <lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="40"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="10"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="1"/></bsdf>
+  </shape>
+  <emitter type="projector">
+    <float name="fov" value="90"/>
+    <float name="scale" value="2"/>
+    <rgb name="irradiance" value="0.5"/>
+    <transform name="to_world"><lookat origin="0, 0, 1" target="0, 0, 0" up="0, 1, 0"/></transform>
+  </emitter>
+</scene>"#;
+    let img = render_xml("projector", xml, 4);
+    for y in 0..40 {
+        for x in 0..40 {
+            let v = img.data[(y * 40 + x) as usize][1];
+            let lit = (10..30).contains(&x) && (10..30).contains(&y);
+            // the frustum's edges fall on pixel edges; allow their samples to round
+            let edge = [9, 10, 29, 30].contains(&x) || [9, 10, 29, 30].contains(&y);
+            if !edge {
+                assert!(
+                    (v - lit as u8 as f32).abs() < 1e-3,
+                    "pixel ({x}, {y}) = {v}, expected {}",
+                    lit as u8
+                );
+            }
+        }
+    }
 }

@@ -581,10 +581,11 @@ impl Sink for NoSplats {
     }
 }
 
-/// The camera ray of a sample of pixel (x, y): dimensions 0 and 1 jitter it in the pixel.
+/// The camera ray of a sample of pixel (x, y): dimensions 0 and 1 place it on the film,
+/// in the pixel (box filter) or drawn from the film's reconstruction filter around it.
 #[inline]
 pub fn camera_ray(cam: &Camera, x: u32, y: u32, s: &mut SampleStream) -> Ray {
     s.set_dimension(0);
-    let u = s.next_2d();
-    cam.ray(x as f32 + u.x, y as f32 + u.y)
+    let p = cam.film_position(x, y, s.next_2d());
+    cam.ray(p.x, p.y)
 }

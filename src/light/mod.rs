@@ -92,6 +92,13 @@ pub enum PointShape {
 /// falling off linearly in angle to zero at `cutoff`; a texture, if any, is projected over
 /// the cone (u, v = 0.5 + 0.5 x / (z tan cutoff), 0.5 + 0.5 y / (z tan cutoff), v
 /// downwards as Mitsuba's bitmaps).
+///
+/// With a `frustum`, Mitsuba's projector: the reciprocal of a perspective camera, whose
+/// irradiance image lies on the plane z = 1 of its frame over
+/// u, v = 0.5 - 0.5 x / (z tan_x), 0.5 - 0.5 y / (z tan_y) in [0, 1]. Its intensity
+/// towards a direction at angle theta from the axis is pi E(u, v) / cos^3 theta, so
+/// that a plane facing it at distance z receives pi E / z^2 everywhere in the frustum
+/// (Mitsuba's `projector.cpp`); the cone angles are 90 degrees.
 #[derive(Clone, Debug)]
 pub struct Spot {
     /// World to the light's frame (the inverse of its `to_world` rotation and scale).
@@ -100,6 +107,8 @@ pub struct Spot {
     pub cutoff: f32,
     pub beam_width: f32,
     pub texture: Option<Arc<crate::scene::texture::Texture>>,
+    /// A projector's tan of half its field of view along x and y.
+    pub frustum: Option<[f32; 2]>,
 }
 
 impl PartialEq for Spot {
@@ -111,6 +120,7 @@ impl PartialEq for Spot {
         self.to_local == o.to_local
             && self.cutoff == o.cutoff
             && self.beam_width == o.beam_width
+            && self.frustum == o.frustum
             && same_texture
     }
 }
@@ -118,6 +128,9 @@ impl PartialEq for Spot {
 impl Spot {
     /// The factor of the intensity towards world direction `d` (from the light).
     pub fn falloff(&self, d: Vec3) -> [f32; 3] {
+        if let Some([tx, ty]) = self.frustum {
+            return self.projected(d, tx, ty);
+        }
         let l = (self.to_local * d).normalize_or_zero();
         let cos = l.z;
         if cos.partial_cmp(&self.cutoff.cos()) != Some(std::cmp::Ordering::Greater) {
@@ -135,6 +148,25 @@ impl Spot {
                 let (u, v) = (0.5 + 0.5 * l.x * f, 0.5 + 0.5 * l.y * f);
                 t.lookup(u, 1.0 - v).map(|c| c * k)
             }
+        }
+    }
+
+    /// A projector's factor towards world direction `d`: pi E(u, v) / cos^3 theta inside
+    /// its frustum, 0 outside.
+    fn projected(&self, d: Vec3, tx: f32, ty: f32) -> [f32; 3] {
+        let l = self.to_local * d;
+        let cos = l.z / l.length();
+        if !(l.z > 0.0 && cos.is_finite()) {
+            return [0.0; 3];
+        }
+        let (u, v) = (0.5 - 0.5 * l.x / (l.z * tx), 0.5 - 0.5 * l.y / (l.z * ty));
+        if !((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v)) {
+            return [0.0; 3];
+        }
+        let k = std::f32::consts::PI / (cos * cos * cos);
+        match &self.texture {
+            None => [k; 3],
+            Some(t) => t.lookup(u, 1.0 - v).map(|c| c * k),
         }
     }
 

@@ -205,9 +205,17 @@ mod tests {
     #[test]
     fn a_diffuse_box_picks_the_path_tracer() {
         let (j, line) = chosen("cornell", Some(64), |_| {});
-        assert_eq!((j.method, j.integrator), (Method::Dtf, Some(IntegratorKind::Path)), "{line}");
+        assert_eq!(
+            (j.method, j.integrator),
+            (Method::Dtf, Some(IntegratorKind::Path)),
+            "{line}"
+        );
         let (j, line) = chosen("cornell", Some(8), |_| {});
-        assert_eq!((j.method, j.integrator), (Method::Plain, Some(IntegratorKind::Path)), "{line}");
+        assert_eq!(
+            (j.method, j.integrator),
+            (Method::Plain, Some(IntegratorKind::Path)),
+            "{line}"
+        );
         assert!(line.contains("about 8 spp fit the budget"), "{line}");
     }
 
@@ -217,7 +225,10 @@ mod tests {
         let (j, line) = chosen("caustic", Some(64), |j| {
             j.integrator = Some(IntegratorKind::Path)
         });
-        assert_eq!((j.method, j.integrator), (Method::Plain, Some(IntegratorKind::Path)));
+        assert_eq!(
+            (j.method, j.integrator),
+            (Method::Plain, Some(IntegratorKind::Path))
+        );
         assert!(line.contains("--integrator names the estimator"), "{line}");
         let sc = crate::scene::load("cornell").unwrap();
         let mut job = RenderJob::new("cornell");
@@ -232,9 +243,17 @@ mod tests {
     fn the_choice_is_stable_over_seeds() {
         for seed in 1..4 {
             let (j, line) = chosen("cornell", Some(64), |j| j.seed = seed);
-            assert_eq!(j.integrator, Some(IntegratorKind::Path), "seed {seed}: {line}");
+            assert_eq!(
+                j.integrator,
+                Some(IntegratorKind::Path),
+                "seed {seed}: {line}"
+            );
             let (j, line) = chosen("caustic", Some(64), |j| j.seed = seed);
-            assert_eq!(j.integrator, Some(IntegratorKind::Bdpt), "seed {seed}: {line}");
+            assert_eq!(
+                j.integrator,
+                Some(IntegratorKind::Bdpt),
+                "seed {seed}: {line}"
+            );
         }
     }
 }

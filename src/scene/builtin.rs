@@ -80,6 +80,7 @@ fn room() -> Result<SceneDesc, String> {
         up: [0.0, 1.0, 0.0],
         fov: 60.0,
         fov_axis: FovAxis::Y,
+        ..Default::default()
     });
     d.defaults = RenderDefaults {
         res: Some((600, 600)),
@@ -101,6 +102,7 @@ pub fn cornell_camera() -> CameraDesc {
         up: [0.0, 1.0, 0.0],
         fov: 39.3077,
         fov_axis: FovAxis::Y,
+        ..Default::default()
     }
 }
 
@@ -262,6 +264,7 @@ fn furnace_room(name: &str) -> SceneDesc {
         up: [0.0, 1.0, 0.0],
         fov: 70.0,
         fov_axis: FovAxis::Y,
+        ..Default::default()
     });
     d.defaults = RenderDefaults {
         res: Some((64, 64)),
@@ -364,6 +367,7 @@ fn caustic() -> SceneDesc {
         up: [0.0, 1.0, 0.0],
         fov: 70.0,
         fov_axis: FovAxis::Y,
+        ..Default::default()
     });
     d.defaults = RenderDefaults {
         res: Some((256, 256)),
@@ -518,6 +522,7 @@ fn rw_room() -> SceneDesc {
         up: [0.0, 1.0, 0.0],
         fov: 62.0,
         fov_axis: FovAxis::Y,
+        ..Default::default()
     });
     d.defaults = RenderDefaults {
         res: Some((256, 256)),

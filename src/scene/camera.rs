@@ -13,6 +13,9 @@
 use crate::accel::Bvh;
 use crate::math::{Bounds3, Ray, Vec2, Vec3};
 
+mod filter;
+pub use filter::PixelFilter;
+
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CameraDesc {
     pub origin: [f32; 3],
@@ -25,6 +28,42 @@ pub struct CameraDesc {
     /// keeps a Mitsuba scene's horizontal field of view as Mitsuba's `-D resx=..` does.
     #[serde(default)]
     pub fov_axis: FovAxis,
+    /// How the film maps to rays: a pinhole (kalos' default) or parallel rays.
+    #[serde(default)]
+    pub projection: Projection,
+    /// The film's reconstruction filter (a box unless a Mitsuba film names one or takes
+    /// Mitsuba's default Gaussian).
+    #[serde(default)]
+    pub filter: PixelFilter,
+}
+
+/// How a camera maps film positions to rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Projection {
+    /// A pinhole at `origin` with the field of view `fov`.
+    #[default]
+    Perspective,
+    /// Parallel rays along the view direction, starting on the plane through `origin`
+    /// (Mitsuba's `orthographic` sensor): the film covers [-1, 1] x [-1/aspect, 1/aspect]
+    /// (aspect = width / height) of the sensor's local x and y, scaled by the lengths of
+    /// its `to_world` axes, `scale_x` and `scale_y` world units. `fov` is not used.
+    Orthographic { scale_x: f32, scale_y: f32 },
+}
+
+impl Default for CameraDesc {
+    /// A pinhole at the origin looking along -z, 45 degrees vertically, box filter.
+    fn default() -> CameraDesc {
+        CameraDesc {
+            origin: [0.0; 3],
+            target: [0.0, 0.0, -1.0],
+            up: [0.0, 1.0, 0.0],
+            fov: 45.0,
+            fov_axis: FovAxis::Y,
+            projection: Projection::Perspective,
+            filter: PixelFilter::Box,
+        }
+    }
 }
 
 /// Which extent of the film a field of view spans (Mitsuba's `fov_axis`).
@@ -78,6 +117,7 @@ impl CameraDesc {
             up: [v[6], v[7], v[8]],
             fov: v[9],
             fov_axis: FovAxis::Y,
+            ..Default::default()
         };
         c.validate().map_err(|e| format!("--camera: {e}"))?;
         Ok(c)
@@ -142,6 +182,8 @@ pub struct Camera {
     up: Vec3,
     tan_half: f32,
     aspect: f32,
+    /// Half the film's width and height in world units, for parallel rays.
+    ortho: Option<(f32, f32)>,
 }
 
 impl Camera {
@@ -160,12 +202,40 @@ impl Camera {
             up,
             tan_half: desc.tan_half_vertical(width, height),
             aspect: width as f32 / height as f32,
+            ortho: match desc.projection {
+                Projection::Perspective => None,
+                Projection::Orthographic { scale_x, scale_y } => {
+                    Some((scale_x, scale_y * height as f32 / width as f32))
+                }
+            },
         }
+    }
+
+    /// Film position (pixels) of a camera sample of pixel (x, y) from uniform `u`: drawn
+    /// from the film's reconstruction filter around the pixel (`x + u` for the box).
+    #[inline]
+    pub fn film_position(&self, x: u32, y: u32, u: Vec2) -> Vec2 {
+        let f = self.desc.filter;
+        Vec2::new(
+            f.film_coordinate(x, self.width, u.x),
+            f.film_coordinate(y, self.height, u.y),
+        )
+    }
+
+    /// Does the camera have a pinhole (light paths can be connected to it)?
+    #[inline]
+    pub fn is_pinhole(&self) -> bool {
+        self.ortho.is_none()
     }
 
     /// Ray through film position (x, y) in pixels, y = 0 at the top of the image.
     #[inline]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
+        if let Some((hw, hh)) = self.ortho {
+            let sx = (2.0 * x / self.width as f32 - 1.0) * hw;
+            let sy = (1.0 - 2.0 * y / self.height as f32) * hh;
+            return Ray::new(self.origin + sx * self.right + sy * self.up, self.forward);
+        }
         let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_half * self.aspect;
         let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_half;
         let d = (self.forward + sx * self.right + sy * self.up).normalize();
@@ -213,7 +283,8 @@ impl Camera {
     #[inline]
     pub fn raster(&self, d: Vec3) -> Option<Vec2> {
         let z = d.dot(self.forward);
-        if z <= 0.0 {
+        // parallel rays: no direction reaches the film through a point
+        if z <= 0.0 || self.ortho.is_some() {
             return None;
         }
         let sx = d.dot(self.right) / z;
@@ -287,6 +358,7 @@ pub fn framing_camera(b: &Bounds3) -> CameraDesc {
         up: [0.0, 1.0, 0.0],
         fov,
         fov_axis: FovAxis::Y,
+        ..Default::default()
     }
 }
 
@@ -426,6 +498,7 @@ pub fn default_camera(
         up: [0.0, 1.0, 0.0],
         fov: 60.0,
         fov_axis: FovAxis::Y,
+        ..Default::default()
     };
     let name = |d: Vec3| match (d.x, d.z) {
         (x, _) if x > 0.5 => "+x",
@@ -452,6 +525,34 @@ pub fn default_camera(
 }
 
 impl CameraDesc {
+    /// What an estimator that connects light paths to the camera (BDPT) makes of it: an
+    /// error for parallel rays (no light path reaches such a film through a point), a
+    /// warning for a reconstruction filter other than the box (its camera rays and light
+    /// splats keep to their pixel, so it renders with the box).
+    pub fn for_light_paths(&self) -> Result<Option<String>, String> {
+        if let Projection::Orthographic { .. } = self.projection {
+            return Err(
+                "the orthographic camera takes no light paths: render it with --integrator path"
+                    .into(),
+            );
+        }
+        Ok((!self.filter.is_box()).then(|| {
+            format!(
+                "the film's {} reconstruction filter is not applied by BDPT: it renders with the box filter (--integrator path applies it)",
+                self.filter.name()
+            )
+        }))
+    }
+
+    /// The camera given on the command line (`--camera`, a pinhole) over the scene's film:
+    /// the scene's reconstruction filter stays.
+    pub fn on_film_of(self, scene: &CameraDesc) -> CameraDesc {
+        CameraDesc {
+            filter: scene.filter,
+            ..self
+        }
+    }
+
     /// The camera as a `--camera` value (its field of view vertical: see [`Self::vertical`]).
     pub fn to_arg(&self) -> String {
         let v = [
@@ -486,6 +587,7 @@ mod tests {
                 up: [0.0, 1.0, 0.0],
                 fov: 60.0,
                 fov_axis: FovAxis::Y,
+                ..Default::default()
             },
             w,
             h,

@@ -147,6 +147,9 @@ pub enum PointLightShape {
         cutoff: f32,
         beam_width: f32,
         texture: Option<PathBuf>,
+        /// Mitsuba's projector instead: tan of half its field of view along x and y (see
+        /// `light::Spot::frustum`); the cone angles are then 90 degrees.
+        frustum: Option<[f32; 2]>,
     },
     /// Light travelling along this direction from infinitely far away.
     Directional(Vec3),
@@ -697,6 +700,7 @@ fn point_shape(
             cutoff,
             beam_width,
             texture,
+            frustum,
         } => {
             let ok = |a: f32| a > 0.0 && a <= 90.0;
             if !(ok(*cutoff) && ok(*beam_width)) || to_world.determinant().abs() < 1e-12 {
@@ -715,6 +719,7 @@ fn point_shape(
                 cutoff: cutoff.to_radians(),
                 beam_width: beam_width.min(*cutoff).to_radians(),
                 texture,
+                frustum: *frustum,
             })
         }
     })

@@ -417,6 +417,7 @@ fn smooth_sphere_room() -> Scene {
         up: [0.0, 1.0, 0.0],
         fov: 35.0,
         fov_axis: FovAxis::Y,
+        ..Default::default()
     });
     Scene::build(d, 0.0).unwrap()
 }
@@ -603,6 +604,7 @@ fn rough_glass_room() -> Scene {
         up: [0.0, 1.0, 0.0],
         fov: 40.0,
         fov_axis: FovAxis::Y,
+        ..Default::default()
     });
     Scene::build(d, 0.0).unwrap()
 }

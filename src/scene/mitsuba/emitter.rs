@@ -7,6 +7,59 @@ use super::*;
 pub(super) const UNIT_EMISSION: [f32; 3] = [1.0; 3];
 
 impl<'a> Loader<'a> {
+    /// Mitsuba's projector: a point light at the origin of `to_world` that projects its
+    /// `irradiance` (a bitmap, or a constant over the whole frustum) through a pinhole of
+    /// field of view `fov` (or `focal_length`) along `fov_axis` of the image, times
+    /// `scale`; a spot whose cone is the frustum (see `light::Spot`).
+    fn projector(&mut self, el: &'a El) -> R<()> {
+        let xf = self.transform(el, "to_world")?;
+        let scale = self.float(el, "scale")?.unwrap_or(1.0);
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(format!(
+                "{}: projector emitter: scale {scale}: must be a finite number >= 0",
+                el.at
+            ));
+        }
+        let (intensity, texture, (w, h)) = match self.color(el, "irradiance", Use::Unbounded)? {
+            None => (UNIT_EMISSION, None, (1, 1)),
+            Some(Color::Rgb(c)) => (c, None, (1, 1)),
+            Some(Color::Bitmap(p, _)) => {
+                let t = crate::scene::Texture::load(&p)
+                    .map_err(|e| format!("{}: projector emitter: {e}", el.at))?;
+                (UNIT_EMISSION, Some(p), (t.width, t.height))
+            }
+        };
+        // the image's field of view, as a camera of the image's resolution has it
+        let (fov, fov_axis) = self.fov(el, w, h)?;
+        let cam = CameraDesc {
+            fov,
+            fov_axis,
+            ..CameraDesc::default()
+        };
+        let ty = cam.tan_half_vertical(w, h);
+        let tx = ty * w as f32 / h as f32;
+        let rot = Mat3::from_mat4(xf);
+        if rot.determinant().abs() < 1e-12 {
+            return Err(format!(
+                "{}: projector emitter: its to_world is not invertible",
+                el.at
+            ));
+        }
+        self.desc.point_lights.push(PointLightDesc {
+            position: xf.transform_point3(Vec3::ZERO),
+            intensity: intensity.map(|c| c * scale),
+            shape: PointLightShape::Spot {
+                to_world: rot,
+                cutoff: 90.0,
+                beam_width: 90.0,
+                texture,
+                frustum: Some([tx, ty]),
+            },
+            source: Some(el.at.clone()),
+        });
+        Ok(())
+    }
+
     pub(super) fn emitter(&mut self, el: &'a El) -> R<()> {
         let kind = el.kind();
         if !known_plugin("emitter", kind) {
@@ -58,10 +111,12 @@ impl<'a> Loader<'a> {
                         cutoff,
                         beam_width,
                         texture,
+                        frustum: None,
                     },
                     source: Some(el.at.clone()),
                 });
             }
+            "projector" => self.projector(el)?,
             "directional" => {
                 let xf = self.transform(el, "to_world")?;
                 let irradiance = self

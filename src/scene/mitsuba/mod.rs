@@ -21,12 +21,15 @@
 //!   (bilinear, nearest), `wrap_mode` (repeat, mirror, clamp) and `to_uv` (`map_kd` for
 //!   diffuse reflectances, a mask's opacity; the texture's mean, warned, in other slots);
 //! - emitters `area` (on a shape: `ke`), `point`, `spot` (`cutoff_angle`, `beam_width`,
-//!   a bitmap `texture` projected over the cone), `directional` (`irradiance`, `direction`
-//!   or +z of `to_world`), `constant`, `envmap`; unset radiance and intensity are white
-//!   (1, 1, 1) as in Mitsuba's RGB mode;
-//! - the `perspective` sensor (`fov`, `fov_axis`, `focal_length`, `to_world`) into
-//!   `CameraDesc`, `hdrfilm` width and height, the integrator's `max_depth` and the
-//!   sampler's `sample_count` into `RenderDefaults`;
+//!   a bitmap `texture` projected over the cone), `projector` (`irradiance`, a constant or
+//!   a bitmap, `scale`, `fov` / `focal_length` / `fov_axis`), `directional` (`irradiance`,
+//!   `direction` or +z of `to_world`), `constant`, `envmap`; unset radiance and intensity
+//!   are white (1, 1, 1) as in Mitsuba's RGB mode;
+//! - the `perspective` sensor (`fov`, `fov_axis`, `focal_length`, `to_world`) and the
+//!   `orthographic` one (`to_world`'s scale, `near_clip`) into `CameraDesc`, `hdrfilm`
+//!   width, height and `rfilter` (box, tent `radius`, gaussian `stddev`; Mitsuba's default
+//!   Gaussian when the film names none), the integrator's `max_depth` and the sampler's
+//!   `sample_count` into `RenderDefaults`;
 //! - integrators: `path` and `bdpt` select kalos' estimator of that name (`--integrator`
 //!   overrides), `direct` is the path tracer at max_depth 2 (the same estimator: emitter and
 //!   BSDF sampling with MIS), `moment` and `aov` are read as their nested integrator,
@@ -50,6 +53,7 @@ mod spectra;
 #[cfg(test)]
 mod tests;
 
+use super::camera::{PixelFilter, Projection};
 use super::{
     CameraDesc, EnvironmentDesc, FovAxis, MaterialDesc, PointLightDesc, PointLightShape, SceneDesc,
     SurfaceModel,

@@ -19,6 +19,8 @@ impl<'a> Loader<'a> {
         self.sensor_seen = true;
         // film and sampler first: the field of view may depend on the aspect ratio
         let (mut w, mut h) = (768u32, 576u32);
+        // an hdrfilm without <rfilter> reconstructs with Mitsuba's default Gaussian
+        let mut filter = PixelFilter::MITSUBA_DEFAULT;
         for c in &el.children {
             let t = if c.tag == "ref" { self.resolve(c)? } else { c };
             match t.tag.as_str() {
@@ -35,31 +37,9 @@ impl<'a> Loader<'a> {
                     }
                     crate::film::check_resolution(w, h)
                         .map_err(|e| format!("{}: film: {e}", t.at))?;
-                    if !t.children.iter().any(|r| r.tag == "rfilter") {
-                        self.warn(
-                            "rfilter",
-                            format!(
-                                "{}: no <rfilter>: Mitsuba's default is a Gaussian reconstruction filter, kalos uses a box filter (the same mean, sharper edges)",
-                                t.at
-                            ),
-                        );
-                    }
                     for r in t.children.iter().filter(|r| r.tag == "rfilter") {
                         r.used.set(true);
-                        if !known_plugin("rfilter", r.kind()) {
-                            return Err(format!("{}: unknown rfilter plugin '{}'", r.at, r.kind()));
-                        }
-                        if r.kind() != "box" {
-                            self.warn(
-                                "rfilter",
-                                format!(
-                                    "{}: pixel filter '{}': kalos uses a box filter (the same mean, sharper edges, more noise)",
-                                    r.at,
-                                    r.kind()
-                                ),
-                            );
-                        }
-                        self.mark_all(r);
+                        filter = self.rfilter(r)?;
                     }
                     for k in [
                         "crop_offset_x",
@@ -93,6 +73,9 @@ impl<'a> Loader<'a> {
             }
         }
         self.desc.defaults.res = Some((w, h));
+        if kind == "orthographic" {
+            return self.orthographic(el, filter);
+        }
         if !matches!(kind, "perspective" | "thinlens") {
             self.mark_all(el);
             self.warn(
@@ -116,6 +99,40 @@ impl<'a> Loader<'a> {
                 self.prop(el, k);
             }
         }
+        let (fov, fov_axis) = self.fov(el, w, h)?;
+        let xf = self.transform(el, "to_world")?;
+        let origin = xf.transform_point3(Vec3::ZERO);
+        let fwd = xf.transform_vector3(Vec3::Z).normalize_or_zero();
+        let up = xf.transform_vector3(Vec3::Y).normalize_or_zero();
+        if Mat3::from_mat4(xf).determinant() < 0.0 {
+            self.warn(
+                "mirrored sensor",
+                format!(
+                    "{}: the sensor's to_world mirrors the image (negative determinant): kalos renders it unmirrored",
+                    el.at
+                ),
+            );
+        }
+        let cam = CameraDesc {
+            origin: origin.into(),
+            target: (origin + fwd).into(),
+            up: up.into(),
+            fov,
+            fov_axis,
+            projection: Projection::Perspective,
+            filter,
+        };
+        cam.validate()
+            .map_err(|e| format!("{}: sensor: {e}", el.at))?;
+        self.desc.camera = Some(cam);
+        self.unused(el, &format!("sensor '{kind}'"));
+        Ok(())
+    }
+
+    /// A perspective field of view, as Mitsuba's `parse_fov` reads it: `fov` along
+    /// `fov_axis` (x by default), else `focal_length` (50mm by default) over a `w` x `h`
+    /// image's horizontal extent.
+    pub(super) fn fov(&mut self, el: &'a El, w: u32, h: u32) -> R<(f32, FovAxis)> {
         let axis = self.string(el, "fov_axis")?.unwrap_or_else(|| "x".into());
         let (fov, axis) = match (self.float(el, "fov")?, self.string(el, "focal_length")?) {
             (Some(f), _) => (f, axis),
@@ -147,30 +164,82 @@ impl<'a> Loader<'a> {
                 el.at
             )
         })?;
-        let xf = self.transform(el, "to_world")?;
-        let origin = xf.transform_point3(Vec3::ZERO);
-        let fwd = xf.transform_vector3(Vec3::Z).normalize_or_zero();
-        let up = xf.transform_vector3(Vec3::Y).normalize_or_zero();
-        if Mat3::from_mat4(xf).determinant() < 0.0 {
-            self.warn(
-                "mirrored sensor",
-                format!(
-                    "{}: the sensor's to_world mirrors the image (negative determinant): kalos renders it unmirrored",
-                    el.at
-                ),
-            );
+        Ok((fov, fov_axis))
+    }
+
+    /// An `<rfilter>`: box, tent (`radius`, 1 pixel) and Gaussian (`stddev`, 0.5 pixels)
+    /// as Mitsuba defines them; the negative-lobed filters are warned and rendered as a box.
+    fn rfilter(&mut self, r: &'a El) -> R<PixelFilter> {
+        let kind = r.kind();
+        if !known_plugin("rfilter", kind) {
+            return Err(format!("{}: unknown rfilter plugin '{kind}'", r.at));
         }
+        let f = match kind {
+            "box" => PixelFilter::Box,
+            "tent" => PixelFilter::Tent {
+                radius: self.float(r, "radius")?.unwrap_or(1.0),
+            },
+            "gaussian" => PixelFilter::Gaussian {
+                stddev: self.float(r, "stddev")?.unwrap_or(0.5),
+            },
+            _ => {
+                self.mark_all(r);
+                self.warn(
+                    "rfilter",
+                    format!(
+                        "{}: pixel filter '{kind}' has negative lobes: kalos uses a box filter (the same mean, sharper edges, more noise)",
+                        r.at
+                    ),
+                );
+                return Ok(PixelFilter::Box);
+            }
+        };
+        f.validate()
+            .map_err(|e| format!("{}: rfilter: {e}", r.at))?;
+        self.unused(r, &format!("rfilter '{kind}'"));
+        Ok(f)
+    }
+
+    /// Mitsuba's `orthographic` sensor: parallel rays along +z of `to_world` from its
+    /// near clip plane, over [-1, 1] x [-1/aspect, 1/aspect] of its local x and y.
+    fn orthographic(&mut self, el: &'a El, filter: PixelFilter) -> R<()> {
+        let near = self.float(el, "near_clip")?.unwrap_or(1e-2);
+        let far = self.float(el, "far_clip")?.unwrap_or(1e4);
+        if !(near >= 0.0 && far > near && far.is_finite()) {
+            return Err(format!(
+                "{}: near_clip {near} and far_clip {far}: need 0 <= near_clip < far_clip",
+                el.at
+            ));
+        }
+        let xf = self.transform(el, "to_world")?;
+        let (sx, sy) = (
+            xf.transform_vector3(Vec3::X).length(),
+            xf.transform_vector3(Vec3::Y).length(),
+        );
+        if !(sx > 0.0 && sy > 0.0 && sx.is_finite() && sy.is_finite()) {
+            return Err(format!(
+                "{}: orthographic sensor: its to_world collapses the film (x scale {sx}, y scale {sy})",
+                el.at
+            ));
+        }
+        let origin = xf.transform_point3(Vec3::new(0.0, 0.0, near));
+        let fwd = xf.transform_vector3(Vec3::Z).normalize_or_zero();
         let cam = CameraDesc {
             origin: origin.into(),
             target: (origin + fwd).into(),
-            up: up.into(),
-            fov,
-            fov_axis,
+            up: xf.transform_vector3(Vec3::Y).normalize_or_zero().into(),
+            fov: 90.0,
+            fov_axis: FovAxis::X,
+            projection: Projection::Orthographic {
+                scale_x: sx,
+                scale_y: sy,
+            },
+            filter,
         };
         cam.validate()
             .map_err(|e| format!("{}: sensor: {e}", el.at))?;
         self.desc.camera = Some(cam);
-        self.unused(el, &format!("sensor '{kind}'"));
+        self.unused(el, "sensor 'orthographic'");
         Ok(())
     }
 

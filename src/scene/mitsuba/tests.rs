@@ -306,6 +306,56 @@ fn camera_follows_mitsuba_conventions() {
     assert!(e.unwrap_err().contains("fov_axis \"z\""));
 }
 
+/// hdrfilm's reconstruction filter: Mitsuba's Gaussian (stddev 0.5) when the film names
+/// none, box, tent and Gaussian with their parameters; the negative-lobed ones warned and
+/// rendered as the box; a bad parameter is one line naming the file and line.
+#[test]
+fn film_filter_is_mitsubas() {
+    use crate::scene::camera::PixelFilter;
+    let filter = |rf: &str| {
+        scene(&format!(
+            r#"<sensor type="perspective"><float name="fov" value="45"/>
+                 <film type="hdrfilm">{rf}</film></sensor><shape type="cube"/>"#
+        ))
+        .map(|d| (d.camera.unwrap().filter, d.warnings))
+    };
+    assert_eq!(filter("").unwrap().0, PixelFilter::Gaussian { stddev: 0.5 });
+    assert_eq!(
+        filter(r#"<rfilter type="box"/>"#).unwrap().0,
+        PixelFilter::Box
+    );
+    assert_eq!(
+        filter(r#"<rfilter type="tent"/>"#).unwrap().0,
+        PixelFilter::Tent { radius: 1.0 }
+    );
+    assert_eq!(
+        filter(r#"<rfilter type="tent"><float name="radius" value="2"/></rfilter>"#)
+            .unwrap()
+            .0,
+        PixelFilter::Tent { radius: 2.0 }
+    );
+    let (g, w) =
+        filter(r#"<rfilter type="gaussian"><float name="stddev" value="0.3"/></rfilter>"#).unwrap();
+    assert_eq!(g, PixelFilter::Gaussian { stddev: 0.3 });
+    assert!(w.iter().all(|w| !w.contains("filter")), "{w:?}");
+    let (m, w) = filter(r#"<rfilter type="mitchell"/>"#).unwrap();
+    assert_eq!(m, PixelFilter::Box);
+    assert!(
+        w.iter()
+            .any(|w| w.contains("'mitchell' has negative lobes")),
+        "{w:?}"
+    );
+    let e =
+        filter(r#"<rfilter type="tent"><float name="radius" value="-1"/></rfilter>"#).unwrap_err();
+    assert!(
+        e.starts_with("t.xml:") && e.contains("tent radius -1"),
+        "{e}"
+    );
+    assert!(!e.contains('\n'));
+    // kalos' own scenes keep the box
+    assert_eq!(crate::scene::CameraDesc::default().filter, PixelFilter::Box);
+}
+
 /// Mitsuba 3.9.1 (scalar_rgb) evaluates `plastic` (diffuse_reflectance 0.5, int_ior 1.9)
 /// at normal incidence, wo = wi = n, to f cos = 0.152383: the reader keeps the diffuse
 /// reflectance as given and the Plastic model applies the coat once (it was applied
