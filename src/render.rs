@@ -90,10 +90,12 @@ pub struct RenderJob {
     /// BDPT: weighting of the strategies: balance (Veach's) or power (exponent 2).
     #[arg(long, value_enum, default_value_t = MisHeuristic::Balance)]
     pub bdpt_mis: MisHeuristic,
-    /// The path tracer's diffuse indirect light: off (traced) or radiosity (Rushmeier and
-    /// Ward: looked up in a radiosity solution computed before the render).
-    #[arg(long, value_enum, default_value_t = Gather::Off)]
-    pub gather: Gather,
+    /// The path tracer's diffuse indirect light from a radiosity solution computed before
+    /// the render: off (traced), radiosity (the solution as a control variate: unbiased) or
+    /// lookup (Rushmeier and Ward's lookup: biased by the solution's error). Default:
+    /// radiosity with --method rw (where the scene allows a solution), else off.
+    #[arg(long, value_enum)]
+    pub gather: Option<Gather>,
     /// Diffuse reflections before the gather looks up (1: the paper's first diffuse bounce).
     #[arg(long, default_value_t = 1)]
     pub gather_depth: u32,
@@ -172,7 +174,7 @@ impl RenderJob {
     /// The settings that decide a sample's value, for this scene.
     pub fn settings(&self, scene: &Scene) -> RenderSettings {
         let (width, height) = self.res.or(scene.defaults.res).unwrap_or(DEFAULT_RES);
-        RenderSettings {
+        let mut set = RenderSettings {
             width,
             height,
             camera: self.camera.unwrap_or(scene.camera),
@@ -194,13 +196,17 @@ impl RenderJob {
                     ),
                     ..self.roulette
                 },
-                gather: self.gather,
+                gather: Gather::Off,
                 gather_depth: self.gather_depth,
                 gather_rays: self.gather_rays,
                 radiosity: self.radiosity,
                 mis: self.bdpt_mis,
             },
-        }
+        };
+        set.integrator.gather = self.gather.unwrap_or_else(|| {
+            Gather::default_for(self.method == Method::Rw, &set.integrator, scene)
+        });
+        set
     }
 
     /// Refuse contradictory or unusable settings.
@@ -706,7 +712,7 @@ mod tests {
         let mut j = RenderJob::new("cornell");
         j.res = Some((8, 8));
         j.time = Some(1e-6);
-        j.gather = Gather::Radiosity;
+        j.gather = Some(Gather::Radiosity);
         j.radiosity.max_area = Some(0.5);
         let r = render_scene(&scene, &j, &crate::progress::Silent).unwrap();
         assert!(

@@ -6,6 +6,7 @@
 pub mod dtf;
 pub mod render;
 pub mod rw;
+pub mod rw_bias;
 pub mod strategies;
 
 pub use crate::progress::{Progress, Silent};
