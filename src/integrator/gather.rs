@@ -45,7 +45,18 @@
 //! variance, 128x128, 256 spp), and a gather ray costs one ray and one lookup against the
 //! camera ray, shadow ray and sampler work every trial pays (docs/results/rushmeier-ward.md).
 //!
-//! Known approximations, both of the radiosity solution: B is the diffuse (Kd) part only,
+//! The control variate (`Gather::Correction` returns it less the lookup, for
+//! `pipeline::rw_bias`): the path goes on whole from the gather vertex x as in `path.rs`
+//! (its throughput beta W, emission and NEE as there), the gather rays bring only the
+//! solution's lookups (their emission and glossy continuations left to the path), and the
+//! path's own lookup at the first diffuse-like hit y along its direction, beta W_d (B - E)/pi
+//! with W_d = W f_d / f, is taken out. The rays' lookups estimate the integral of the
+//! solution's reflected light over x's diffuse lobe, the path's lookup the same integral
+//! with the path's density: they cancel in the mean, so the estimate is the path tracer's,
+//! unbiased whatever the solution's error. It gathers at the `gather_depth`-th diffuse
+//! vertex only.
+//!
+//! Known approximations of the lookup, both of the radiosity solution: B is the diffuse (Kd) part only,
 //! so the glossy reflection of a receiver y is missing from the lookup; and B is the mesh's
 //! interpolation. Both biases fall with glossiness and element size. BRDF lobe selection
 //! must be `Mixture`, `Static` or `Mis` (their weights are proportional to f, so the split

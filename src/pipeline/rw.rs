@@ -15,12 +15,20 @@
 //!    Pixels still running are in lockstep, so each pass starts at one sample index and
 //!    no index repeats in a pixel.
 //! 3. The energy-preserving filter on the film (means, S_p, M).
+//! 4. With the radiosity gather (the default of `--method rw`): the gather's bias
+//!    correction (`rw_bias`), from its own samples taken after the first Mt trials.
+//!
+//! The light seen directly (through mirrors and glass too) is kept out of the filter, but
+//! its deviation is in the stopping test: an emitter's edge pixels carry the image's
+//! largest error and get trials to the ceiling.
 //!
 //! Budgets (`--spp`, `--time`): the paper plans by D alone; with a budget, Mt (and with it
 //! Mt_ceiling = 4 Mt) is scaled so that the spend the pilot predicts,
 //! mean_p clamp((t S_p / (D Lt_vis))^2, Mt, 4 Mt) over the pilot pixels, equals the
 //! budget's average trials per pixel, and the passes stop when the budget is spent (a
-//! hard cap on the total trials, or on the wall clock for `--time`, pilot included).
+//! hard cap on the total trials, or on the wall clock for `--time`, pilot included; with
+//! `--time` the passes fit the time left, and once every pixel has converged or reached
+//! the ceiling the rest goes to every pixel).
 
 use super::render::{render_pass, render_pass_split, Counts, Pass, RenderSettings};
 use super::rw_bias;
@@ -419,11 +427,7 @@ pub fn render_rw(
             )
         }
     };
-    let correction_samples = if correct {
-        rw_bias::samples_for(mt)
-    } else {
-        0
-    };
+    let correction_samples = if correct { rw_bias::samples_for(mt) } else { 0 };
     if cap_total != u64::MAX {
         let cost = rw_bias::CORRECTION_COST * (correction_samples as u64 * pixels as u64) as f64;
         cap_total = cap_total.saturating_sub(cost as u64);
@@ -457,7 +461,10 @@ pub fn render_rw(
     // The correction's samples (their own stream 2), before the passes a deadline trims.
     // Two independent halves (streams 2 and 3): `rw_bias::correction` weighs each by the
     // other.
-    let mut cfilms = [Film::new(set.width, set.height)?, Film::new(set.width, set.height)?];
+    let mut cfilms = [
+        Film::new(set.width, set.height)?,
+        Film::new(set.width, set.height)?,
+    ];
     if correction_samples > 0 {
         let mut corr = integrator.clone();
         corr.set.gather = Gather::Correction;
@@ -524,22 +531,31 @@ pub fn render_rw(
     // pixel are a far larger sample than the pilot's 16, so the ceiling is raised to the
     // `STEIN_QUANTILE` of the needs they predict (never lowered below 4 Mt).
     if budget == RwBudget::Convergence && !progress.cancelled() {
-        let q = quantile(&needs_of(&film, split.then_some(&vfilm), params, &pilot), STEIN_QUANTILE);
+        let q = quantile(
+            &needs_of(&film, split.then_some(&vfilm), params, &pilot),
+            STEIN_QUANTILE,
+        );
         let q = q.ceil().clamp(0.0, u32::MAX as f64) as u32;
         ceiling = ceiling.max(q);
     }
     let mut active: Vec<bool> = first_conv.iter().map(|&c| !c).collect();
-    while done < ceiling && !progress.cancelled() {
-        if let Some(dl) = deadline {
-            let el = t0.elapsed().as_secs_f64();
-            let per_pass = t1.elapsed().as_secs_f64() / passes as f64;
-            if el + per_pass > dl {
+    // With --time, once every pixel has converged or reached the ceiling, what is left of
+    // the time goes to every pixel (more trials never hurt; stopping early wasted 10%).
+    let mut extend = false;
+    // the trials' phase so far in trials (a correction sample costs CORRECTION_COST)
+    let phase_trials = |spent: u64| {
+        spent as f64 + rw_bias::CORRECTION_COST * (correction_samples as u64 * pixels as u64) as f64
+    };
+    while !progress.cancelled() {
+        let mut n_active = active.iter().filter(|&&a| a).count() as u64;
+        if done >= ceiling || n_active == 0 {
+            if deadline.is_none() {
                 break;
             }
-        }
-        let n_active = active.iter().filter(|&&a| a).count() as u64;
-        if n_active == 0 {
-            break;
+            extend = true;
+            ceiling = u32::MAX;
+            active.iter_mut().for_each(|a| *a = true);
+            n_active = pixels as u64;
         }
         // passes land on the pilot's ceiling, so the share there is measured
         let stop = if done < pilot_ceiling {
@@ -548,6 +564,16 @@ pub fn render_rw(
             ceiling
         };
         let mut k = step.min(stop - done);
+        if let Some(dl) = deadline {
+            // as many trials as the time left holds, at the rate measured so far
+            let left = dl - t0.elapsed().as_secs_f64();
+            let per_trial = t1.elapsed().as_secs_f64() / phase_trials(spent).max(1.0);
+            let fit = left / (per_trial * n_active as f64).max(1e-12);
+            if fit < 1.0 {
+                break;
+            }
+            k = k.min(fit.min(u32::MAX as f64) as u32);
+        }
         if cap_total != u64::MAX {
             let left = cap_total.saturating_sub(spent);
             k = k.min((left / n_active).min(u32::MAX as u64) as u32);
@@ -568,7 +594,7 @@ pub fn render_rw(
         for (i, t) in trials.iter_mut().enumerate() {
             if active[i] {
                 *t += k;
-                active[i] = !conv[i];
+                active[i] = extend || !conv[i];
             }
         }
         spent += k as u64 * n_active;
