@@ -90,9 +90,8 @@ pub struct RenderJob {
     /// BDPT: weighting of the strategies: balance (Veach's) or power (exponent 2).
     #[arg(long, value_enum, default_value_t = MisHeuristic::Balance)]
     pub bdpt_mis: MisHeuristic,
-    /// The path tracer's diffuse indirect light from a radiosity solution computed before
-    /// the render: off (traced), radiosity (the solution as a control variate: unbiased) or
-    /// lookup (Rushmeier and Ward's lookup: biased by the solution's error). Default:
+    /// The path tracer's diffuse indirect light: off (traced) or radiosity (Rushmeier and
+    /// Ward: looked up in a radiosity solution computed before the render). Default:
     /// radiosity with --method rw (where the scene allows a solution), else off.
     #[arg(long, value_enum)]
     pub gather: Option<Gather>,
