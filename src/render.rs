@@ -97,9 +97,10 @@ pub struct RenderJob {
     #[arg(long, value_enum, default_value_t = MisHeuristic::Balance)]
     pub bdpt_mis: MisHeuristic,
     /// The path tracer's diffuse indirect light: off (traced) or radiosity (Rushmeier and
-    /// Ward: looked up in a radiosity solution computed before the render).
-    #[arg(long, value_enum, default_value_t = Gather::Off)]
-    pub gather: Gather,
+    /// Ward: looked up in a radiosity solution computed before the render). Default:
+    /// radiosity with --method rw (where the scene allows a solution), else off.
+    #[arg(long, value_enum)]
+    pub gather: Option<Gather>,
     /// Diffuse reflections before the gather looks up (1: the paper's first diffuse bounce).
     #[arg(long, default_value_t = 1)]
     pub gather_depth: u32,
@@ -178,7 +179,7 @@ impl RenderJob {
     /// The settings that decide a sample's value, for this scene.
     pub fn settings(&self, scene: &Scene) -> RenderSettings {
         let (width, height) = self.res.or(scene.defaults.res).unwrap_or(DEFAULT_RES);
-        RenderSettings {
+        let mut set = RenderSettings {
             width,
             height,
             camera: self
@@ -202,13 +203,17 @@ impl RenderJob {
                     ),
                     ..self.roulette
                 },
-                gather: self.gather,
+                gather: Gather::Off,
                 gather_depth: self.gather_depth,
                 gather_rays: self.gather_rays,
                 radiosity: self.radiosity,
                 mis: self.bdpt_mis,
             },
-        }
+        };
+        set.integrator.gather = self.gather.unwrap_or_else(|| {
+            Gather::default_for(self.method == Method::Rw, &set.integrator, scene)
+        });
+        set
     }
 
     /// Refuse contradictory or unusable settings.
@@ -409,7 +414,7 @@ pub fn choose_method(
         Some("--integrator names the estimator")
     } else if scene.defaults.integrator.is_some() {
         Some("the scene file names its integrator")
-    } else if job.gather != Gather::Off {
+    } else if job.gather.is_some() {
         Some("--gather names the path tracer's gather")
     } else if job.post_filter.is_some() {
         Some("--filter filters a plain render")
@@ -839,7 +844,7 @@ mod tests {
         let mut j = RenderJob::new("cornell");
         j.res = Some((8, 8));
         j.time = Some(1e-6);
-        j.gather = Gather::Radiosity;
+        j.gather = Some(Gather::Radiosity);
         j.radiosity.max_area = Some(0.5);
         let r = render_scene(&scene, &j, &crate::progress::Silent).unwrap();
         assert!(

@@ -45,7 +45,18 @@
 //! variance, 128x128, 256 spp), and a gather ray costs one ray and one lookup against the
 //! camera ray, shadow ray and sampler work every trial pays (docs/results/rushmeier-ward.md).
 //!
-//! Known approximations, both of the radiosity solution: B is the diffuse (Kd) part only,
+//! The control variate (`Gather::Correction` returns it less the lookup, for
+//! `pipeline::rw_bias`): the path goes on whole from the gather vertex x as in `path.rs`
+//! (its throughput beta W, emission and NEE as there), the gather rays bring only the
+//! solution's lookups (their emission and glossy continuations left to the path), and the
+//! path's own lookup at the first diffuse-like hit y along its direction, beta W_d (B - E)/pi
+//! with W_d = W f_d / f, is taken out. The rays' lookups estimate the integral of the
+//! solution's reflected light over x's diffuse lobe, the path's lookup the same integral
+//! with the path's density: they cancel in the mean, so the estimate is the path tracer's,
+//! unbiased whatever the solution's error. It gathers at the `gather_depth`-th diffuse
+//! vertex only.
+//!
+//! Known approximations of the lookup, both of the radiosity solution: B is the diffuse (Kd) part only,
 //! so the glossy reflection of a receiver y is missing from the lookup; and B is the mesh's
 //! interpolation. Both biases fall with glossiness and element size. BRDF lobe selection
 //! must be `Mixture`, `Static` or `Mis` (their weights are proportional to f, so the split
@@ -94,6 +105,34 @@ pub enum Gather {
     Off,
     /// Rushmeier and Ward: look up the diffuse indirect light in the radiosity solution.
     Radiosity,
+    /// The lookup's error, sample by sample (the pipeline's bias correction, not a
+    /// user's choice): the control-variate estimate (module doc) less the lookup's, both
+    /// from the same random numbers. Its mean is minus the lookup's bias.
+    #[value(skip)]
+    #[serde(skip)]
+    Correction,
+}
+
+impl Gather {
+    /// Whether the gather reads a radiosity solution.
+    #[inline]
+    pub fn reads_solution(self) -> bool {
+        self != Gather::Off
+    }
+
+    /// The gather a method takes when no `--gather` is given: the radiosity gather for
+    /// Rushmeier and Ward's method (`rw`) where the solution can be made (the path tracer,
+    /// area lights only, a selection the gather can split), else off.
+    pub fn default_for(rw: bool, set: &IntegratorSettings, scene: &Scene) -> Gather {
+        let usable = set.kind == super::IntegratorKind::Path
+            && !scene.lights.has_distant()
+            && set.roulette.select != super::BsdfSelect::Decompose;
+        if rw && usable {
+            Gather::Radiosity
+        } else {
+            Gather::Off
+        }
+    }
 }
 
 /// Whether a BSDF has a diffuse lobe that reflects anything.
@@ -105,9 +144,44 @@ fn has_diffuse(bsdf: &Bsdf) -> bool {
     }
 }
 
-/// Radiance arriving along `ray` (one sample), diffuse indirect light from `sol`.
+/// Radiance arriving along `ray` (one sample), diffuse indirect light from `sol`; with
+/// [`Gather::Correction`] the control variate's estimate less the lookup's.
 #[allow(clippy::too_many_arguments)]
 pub fn radiance<const N: usize>(
+    scene: &Scene,
+    sol: &Solution,
+    ray: Ray,
+    s: &mut SampleStream,
+    set: &IntegratorSettings,
+    gather_depth: u32,
+    l_tilde: &LTilde<N>,
+    c: &mut Counters,
+) -> Spectrum<N> {
+    if set.gather != Gather::Correction {
+        return estimate(scene, sol, ray, s, set, gather_depth, l_tilde, false, c);
+    }
+    let mut s_lookup = *s;
+    let lookup = estimate(
+        scene,
+        sol,
+        ray,
+        &mut s_lookup,
+        set,
+        gather_depth,
+        l_tilde,
+        false,
+        c,
+    );
+    c.paths -= 1;
+    estimate(scene, sol, ray, s, set, gather_depth, l_tilde, true, c) - lookup
+}
+
+/// One sample of the lookup (`cv` false) or of the control variate (`cv` true): the
+/// traced path goes on whole from the gather vertex, its own lookup along its direction
+/// is taken out and the gather rays' lookups (the solution's integral there, without
+/// emission) put in; unbiased whatever the solution's error.
+#[allow(clippy::too_many_arguments)]
+fn estimate<const N: usize>(
     scene: &Scene,
     sol: &Solution,
     mut ray: Ray,
@@ -115,6 +189,7 @@ pub fn radiance<const N: usize>(
     set: &IntegratorSettings,
     gather_depth: u32,
     l_tilde: &LTilde<N>,
+    cv: bool,
     c: &mut Counters,
 ) -> Spectrum<N> {
     let mut l = Spectrum::<N>::ZERO;
@@ -127,6 +202,7 @@ pub fn radiance<const N: usize>(
     let mut segments = 0u32;
     let mut diffuse_vertices = 0u32;
     let rr = &set.roulette;
+    // (with the control variate beta_d is minus the lookup's weight)
     c.paths += 1;
     loop {
         c.rays += 1;
@@ -139,8 +215,9 @@ pub fn radiance<const N: usize>(
         let front = wo.dot(hit.ng) > 0.0;
 
         // Emission, MIS-weighted against NEE, for the traced and the waiting parts.
+        // (with the control variate only the traced part: the lookup is reflected light)
         if let Some((le, w)) = emission::<N>(scene, mat, &hit, wo, prev_pdf, prev_delta) {
-            l += (beta + beta_d) * le * w;
+            l += if cv { beta } else { beta + beta_d } * le * w;
         }
 
         let bsdf = scene.bsdf_at(mat, &hit, wo);
@@ -153,7 +230,7 @@ pub fn radiance<const N: usize>(
                         l += beta_d * r;
                     }
                 }
-            } else {
+            } else if !cv {
                 // purely glossy: trace its reflection with the rest of the path
                 beta += beta_d;
             }
@@ -180,11 +257,17 @@ pub fn radiance<const N: usize>(
         if diffuse {
             diffuse_vertices += 1;
         }
-        let gather = diffuse && diffuse_vertices >= gather_depth.max(1);
+        // (the control variate's path goes on whole: it gathers at that vertex only)
+        let gather = diffuse
+            && if cv {
+                diffuse_vertices == gather_depth.max(1)
+            } else {
+                diffuse_vertices >= gather_depth.max(1)
+            };
 
         // The roulette sees the whole throughput (beta_d is carried only through delta
-        // vertices, where it is not black).
-        let f_total = beta + beta_d;
+        // vertices, where it is not black; with the control variate the traced path).
+        let f_total = if cv { beta } else { beta + beta_d };
         let sel = rr.select::<N>(segments - 1, &f_total, &bsdf);
 
         // Next-event estimation (beta_d is black at non-delta vertices).
@@ -198,14 +281,15 @@ pub fn radiance<const N: usize>(
             }
         }
 
-        // K gather rays: the diffuse lobe estimated on its own, never rouletted
-        let split = gather && set.gather_rays > 1;
+        // K gather rays: the diffuse lobe estimated on its own, never rouletted (with the
+        // control variate: the lookups only, the solution's integral)
+        let split = gather && (cv || set.gather_rays > 1);
         if split {
             l += gather_rays::<N>(
                 scene, sol, hit.p, ng, &frame, wo_l, &bsdf, &sel, &f_total, u_bsdf, segments, set,
-                s, c,
+                cv, s, c,
             );
-            if bsdf.lobe_array().1 < 2 {
+            if !cv && bsdf.lobe_array().1 < 2 {
                 break;
             }
         }
@@ -238,9 +322,15 @@ pub fn radiance<const N: usize>(
                     wd[k] = w[k] * (f_d[k] / f[k]).min(1.0);
                 }
             }
-            // (with K gather rays the diffuse part was estimated above)
-            beta_d = if split { Spectrum::ZERO } else { f_total * wd };
-            beta = f_total * (w - wd);
+            if cv {
+                // the path goes on whole; its own lookup waits to be taken out
+                beta_d = f_total * wd * -1.0;
+                beta = f_total * w;
+            } else {
+                // (with K gather rays the diffuse part was estimated above)
+                beta_d = if split { Spectrum::ZERO } else { f_total * wd };
+                beta = f_total * (w - wd);
+            }
         } else {
             beta *= w;
             beta_d *= w;
@@ -271,6 +361,7 @@ fn gather_rays<const N: usize>(
     u0: Vec2,
     segments: u32,
     set: &IntegratorSettings,
+    cv: bool,
     s: &SampleStream,
     c: &mut Counters,
 ) -> Spectrum<N> {
@@ -303,6 +394,7 @@ fn gather_rays<const N: usize>(
             pdf_mis,
             segments,
             set,
+            cv,
             &mut sj,
             c,
         );
@@ -324,6 +416,7 @@ fn incident<const N: usize>(
     pdf_x: f32,
     mut segments: u32,
     set: &IntegratorSettings,
+    cv: bool,
     s: &mut SampleStream,
     c: &mut Counters,
 ) -> Spectrum<N> {
@@ -342,7 +435,10 @@ fn incident<const N: usize>(
         let mut le = Spectrum::<N>::ZERO;
         if let Some((e, w)) = emission::<N>(scene, mat, &hit, wo, pdf_x, prev_delta) {
             le = e;
-            l += thr * le * w;
+            // (the control variate's rays bring the lookup only: the path brings light)
+            if !cv {
+                l += thr * le * w;
+            }
         }
         let bsdf = scene.bsdf_at(mat, &hit, wo);
         if !bsdf.is_delta() {
@@ -351,7 +447,7 @@ fn incident<const N: usize>(
                     if let Some(r) = sol.reflected::<N>(hit.prim, hit.p, front) {
                         l += thr * r;
                     }
-                } else if bsdf != Bsdf::Black {
+                } else if !cv && bsdf != Bsdf::Black {
                     // purely glossy: traced from here (its emission, counted above, taken out)
                     let mut rest = *set;
                     if rest.max_depth >= 0 {

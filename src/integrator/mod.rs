@@ -177,13 +177,13 @@ impl Integrator {
         bands: usize,
         progress: &dyn crate::progress::Progress,
     ) -> Result<Integrator, String> {
-        if set.gather == Gather::Radiosity && set.kind != IntegratorKind::Path {
+        if set.gather.reads_solution() && set.kind != IntegratorKind::Path {
             return Err(format!(
                 "--gather radiosity: the gather belongs to the path tracer, not to --integrator {}",
                 crate::options::name(&set.kind)
             ));
         }
-        if set.gather == Gather::Radiosity && set.roulette.select == BsdfSelect::Decompose {
+        if set.gather.reads_solution() && set.roulette.select == BsdfSelect::Decompose {
             return Err(
                 "--gather radiosity with --bsdf-select decompose: the gather splits the \
                         diffuse lobe itself; use mixture, static or mis"
@@ -212,7 +212,7 @@ impl Integrator {
                     "--integrator bdpt: the scene has {what}, which BDPT does not support yet; use --integrator path"
                 ));
             }
-            if set.kind == IntegratorKind::Radiosity || set.gather == Gather::Radiosity {
+            if set.kind == IntegratorKind::Radiosity || set.gather.reads_solution() {
                 return Err(format!(
                     "--integrator radiosity / --gather radiosity: the scene has {what}, which the radiosity solution does not support; use --integrator path with --gather off"
                 ));
@@ -254,7 +254,7 @@ impl Integrator {
             .mode
             .uses_estimate()
             .then(|| RadianceEstimate::of_scene(scene));
-        let radiosity = if set.gather == Gather::Radiosity
+        let radiosity = if set.gather.reads_solution()
             || set.kind == IntegratorKind::Radiosity
             || reads_radiosity_l_tilde
         {
@@ -347,10 +347,7 @@ impl Integrator {
     /// the tree's size favours).
     pub fn batches(&self) -> bool {
         matches!(self.set.kind, IntegratorKind::Path)
-            && !matches!(
-                (&self.radiosity, self.set.gather),
-                (Some(_), Gather::Radiosity)
-            )
+            && !(self.radiosity.is_some() && self.set.gather.reads_solution())
     }
 
     /// Whether [`Layer::Direct`] means anything here: BDPT, whose camera subpath already
@@ -519,7 +516,7 @@ impl Integrator {
             IntegratorKind::Path => {
                 let ray = camera_ray(cam, x, y, s);
                 match (&self.radiosity, self.set.gather) {
-                    (Some(sol), Gather::Radiosity) => gather::radiance::<N>(
+                    (Some(sol), g) if g.reads_solution() => gather::radiance::<N>(
                         scene,
                         sol,
                         ray,

@@ -7,6 +7,7 @@ pub mod auto;
 pub mod dtf;
 pub mod render;
 pub mod rw;
+pub mod rw_bias;
 pub mod strategies;
 
 pub use crate::progress::{Progress, Silent};

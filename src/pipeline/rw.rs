@@ -15,19 +15,28 @@
 //!    Pixels still running are in lockstep, so each pass starts at one sample index and
 //!    no index repeats in a pixel.
 //! 3. The energy-preserving filter on the film (means, S_p, M).
+//! 4. With the radiosity gather (the default of `--method rw`): the gather's bias
+//!    correction (`rw_bias`), from its own samples taken after the first Mt trials.
+//!
+//! The light seen directly (through mirrors and glass too) is kept out of the filter, but
+//! its deviation is in the stopping test: an emitter's edge pixels carry the image's
+//! largest error and get trials to the ceiling.
 //!
 //! Budgets (`--spp`, `--time`): the paper plans by D alone; with a budget, Mt (and with it
 //! Mt_ceiling = 4 Mt) is scaled so that the spend the pilot predicts,
 //! mean_p clamp((t S_p / (D Lt_vis))^2, Mt, 4 Mt) over the pilot pixels, equals the
 //! budget's average trials per pixel, and the passes stop when the budget is spent (a
-//! hard cap on the total trials, or on the wall clock for `--time`, pilot included).
+//! hard cap on the total trials, or on the wall clock for `--time`, pilot included; with
+//! `--time` the passes fit the time left, and once every pixel has converged or reached
+//! the ceiling the rest goes to every pixel).
 
 use super::render::{render_pass, render_pass_split, Counts, Pass, RenderSettings};
+use super::rw_bias;
 use crate::film::Film;
 use crate::filter::energy::{
     self, converged, deviation, EnergyOutput, EnergyParams, Pilot, CEILING_FACTOR, PILOT_TRIALS,
 };
-use crate::integrator::{Counters, Integrator};
+use crate::integrator::{Counters, Gather, Integrator};
 use crate::progress::Progress;
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -50,6 +59,11 @@ pub struct RwParams {
     /// RW: skip the energy-preserving filter (the image is the trials' means).
     #[arg(long = "rw-no-filter")]
     pub no_filter: bool,
+    /// RW: skip the gather's bias correction (a few samples per pixel of the radiosity
+    /// solution as a control variate, added where their mean stands out of their noise):
+    /// the image keeps the solution's bias.
+    #[arg(long = "rw-no-correction")]
+    pub no_correction: bool,
     /// RW: test and filter the light seen directly (through mirrors and glass) with the
     /// rest, as the paper's text does. By default it is kept apart: a pixel on an emitter's
     /// edge varies only with its footprint, and its excess is an edge, not noise.
@@ -163,6 +177,10 @@ pub struct RwStats {
     pub spread_share: f64,
     pub filter_passes: u32,
     pub untreated: usize,
+    /// The gather's bias correction: samples per pixel (0: none) and the image's mean
+    /// weight alpha (0: the lookup kept, 1: the correction taken whole).
+    pub correction_samples: u32,
+    pub correction_alpha: f64,
     pub pilot_seconds: f64,
     pub trials_seconds: f64,
     pub filter_seconds: f64,
@@ -262,6 +280,20 @@ fn sum_means(a: &Film, b: Option<&Film>) -> Vec<[f64; 3]> {
     m
 }
 
+/// Each pixel's S_p as the stopping test reads it: the transport's, with the deviation
+/// of the light seen directly (kept apart from the filter) added in quadrature. An
+/// emitter's edge is not noise to filter, but its pixels' error is the largest of the
+/// image (their footprint on a bright light): they must get trials, not stop at Mt.
+fn test_deviations(film: &Film, vis: Option<&Film>) -> Vec<f64> {
+    let mut s: Vec<f64> = film.pixels.iter().map(deviation).collect();
+    if let Some(v) = vis {
+        for (s, p) in s.iter_mut().zip(&v.pixels) {
+            *s = s.hypot(deviation(p));
+        }
+    }
+    s
+}
+
 /// Predicted trials of a pixel of pilot deviation S_p: (t S_p / (D Lt_vis))^2.
 fn need(t: f64, s_p: f64, allowed: f64) -> f64 {
     (t * s_p / allowed).powi(2)
@@ -270,9 +302,9 @@ fn need(t: f64, s_p: f64, allowed: f64) -> f64 {
 /// Each pixel's predicted need (t S / (D unit))^2 from a film's statistics, read as the
 /// stopping test reads them: S pooled over 3x3 unless `--rw-pixel-test`, the display unit
 /// at the pixel's (pooled) luminance.
-fn needs_of(film: &Film, params: &RwParams, pilot: &Pilot) -> Vec<f64> {
+fn needs_of(film: &Film, vis: Option<&Film>, params: &RwParams, pilot: &Pilot) -> Vec<f64> {
     let (w, h) = (film.width as usize, film.height as usize);
-    let s_p: Vec<f64> = film.pixels.iter().map(deviation).collect();
+    let s_p = test_deviations(film, vis);
     let s = pooled(&s_p, w, h, params.pixel_test);
     let mean: Vec<[f64; 3]> = film.pixels.iter().map(|p| p.mean()).collect();
     let lum = test_luminance(&mean, w, h, params.pixel_test);
@@ -359,7 +391,7 @@ pub fn render_rw(
     // Each pilot pixel's predicted need, (t S / (D unit))^2, read with the statistic the
     // stopping test will read (the pooled 3x3 deviation unless --rw-pixel-test) and the
     // display unit at the pixel's level: the prediction is of the test that is applied.
-    let needs = needs_of(&pfilm, params, &pilot);
+    let needs = needs_of(&pfilm, split.then_some(&pvis), params, &pilot);
     // Eq. 10's Mt is a typical count from the average S_16; the paper multiplies it by a
     // heuristic 4 "to insure that the majority of pixels will converge". Where a few
     // pixels carry heavy tails (cornell's ceiling by the light) the average is far below
@@ -368,11 +400,18 @@ pub fn render_rw(
         .ceil()
         .clamp(1.0, (u32::MAX / CEILING_FACTOR) as f64) as u32;
 
+    // The gather's bias correction (`rw_bias`) takes its share of a budget.
+    let correct = integrator.set.gather == Gather::Radiosity && !params.no_correction;
+    let trial_share = if correct {
+        1.0 / (1.0 + rw_bias::CORRECTION_COST * rw_bias::CORRECTION_SHARE)
+    } else {
+        1.0
+    };
     // Mt used, and the cap on the total trials.
-    let (mt, cap_total, deadline) = match budget {
+    let (mt, mut cap_total, deadline) = match budget {
         RwBudget::Convergence => (pilot.mt.max(mt_quantile).max(PILOT_TRIALS), u64::MAX, None),
         RwBudget::Spp(spp) => (
-            mt_for_budget(&needs, spp),
+            mt_for_budget(&needs, spp * trial_share),
             (spp * pixels as f64).round() as u64,
             None,
         ),
@@ -381,9 +420,18 @@ pub fn render_rw(
             // keep ~2% for the filter
             let left = (secs * 0.98 - pilot_seconds).max(0.0);
             let spp = rate * left / pixels as f64;
-            (mt_for_budget(&needs, spp), u64::MAX, Some(secs * 0.98))
+            (
+                mt_for_budget(&needs, spp * trial_share),
+                u64::MAX,
+                Some(secs * 0.98),
+            )
         }
     };
+    let correction_samples = if correct { rw_bias::samples_for(mt) } else { 0 };
+    if cap_total != u64::MAX {
+        let cost = rw_bias::CORRECTION_COST * (correction_samples as u64 * pixels as u64) as f64;
+        cap_total = cap_total.saturating_sub(cost as u64);
+    }
     let pilot_ceiling = mt.saturating_mul(CEILING_FACTOR);
     let mut ceiling = pilot_ceiling;
     let predicted_trials = predicted(&needs, mt as f64);
@@ -410,13 +458,41 @@ pub fn render_rw(
         run(&p, film, vfilm)
     };
     counters.add(&pass(Counts::Uniform(first), 0, &mut film, &mut vfilm));
+    // The correction's samples (their own stream 2), before the passes a deadline trims.
+    // Two independent halves (streams 2 and 3): `rw_bias::correction` weighs each by the
+    // other.
+    let mut cfilms = [
+        Film::new(set.width, set.height)?,
+        Film::new(set.width, set.height)?,
+    ];
+    if correction_samples > 0 {
+        let mut corr = integrator.clone();
+        corr.set.gather = Gather::Correction;
+        planned += correction_samples as u64 * pixels as u64;
+        progress.set_total(planned);
+        for (k, cfilm) in cfilms.iter_mut().enumerate() {
+            counters.add(&render_pass(
+                &Pass {
+                    scene,
+                    integrator: &corr,
+                    set,
+                    counts: Counts::Uniform(correction_samples.div_ceil(2)),
+                    first_index: 0,
+                    stream: 2 + k as u32,
+                    progress,
+                },
+                cfilm,
+                None,
+            ));
+        }
+    }
     let mut trials = vec![first; pixels];
     let mut done = first; // trials of every pixel still running
     let mut spent = first as u64 * pixels as u64;
     let mut passes = 1u32;
     let (w, h) = (set.width as usize, set.height as usize);
-    let conv_map = |film: &Film| {
-        let s_p: Vec<f64> = film.pixels.iter().map(deviation).collect();
+    let conv_map = |film: &Film, vis: &Film| {
+        let s_p = test_deviations(film, split.then_some(vis));
         let s = pooled(&s_p, w, h, params.pixel_test);
         let lum = match params.target {
             RwTarget::Linear => Vec::new(),
@@ -447,7 +523,7 @@ pub fn render_rw(
             pilot.lt_vis,
         )
     };
-    let first_conv = conv_map(&film);
+    let first_conv = conv_map(&film, &vfilm);
     let share = |c: &[bool]| c.iter().filter(|&&x| x).count() as f64 / pixels.max(1) as f64;
     // The share converged once the pilot's ceiling 4 Mt is reached (or at the end).
     let mut share_at_pilot_ceiling = (done >= pilot_ceiling).then(|| share(&first_conv));
@@ -455,22 +531,31 @@ pub fn render_rw(
     // pixel are a far larger sample than the pilot's 16, so the ceiling is raised to the
     // `STEIN_QUANTILE` of the needs they predict (never lowered below 4 Mt).
     if budget == RwBudget::Convergence && !progress.cancelled() {
-        let q = quantile(&needs_of(&film, params, &pilot), STEIN_QUANTILE);
+        let q = quantile(
+            &needs_of(&film, split.then_some(&vfilm), params, &pilot),
+            STEIN_QUANTILE,
+        );
         let q = q.ceil().clamp(0.0, u32::MAX as f64) as u32;
         ceiling = ceiling.max(q);
     }
     let mut active: Vec<bool> = first_conv.iter().map(|&c| !c).collect();
-    while done < ceiling && !progress.cancelled() {
-        if let Some(dl) = deadline {
-            let el = t0.elapsed().as_secs_f64();
-            let per_pass = t1.elapsed().as_secs_f64() / passes as f64;
-            if el + per_pass > dl {
+    // With --time, once every pixel has converged or reached the ceiling, what is left of
+    // the time goes to every pixel (more trials never hurt; stopping early wasted 10%).
+    let mut extend = false;
+    // the trials' phase so far in trials (a correction sample costs CORRECTION_COST)
+    let phase_trials = |spent: u64| {
+        spent as f64 + rw_bias::CORRECTION_COST * (correction_samples as u64 * pixels as u64) as f64
+    };
+    while !progress.cancelled() {
+        let mut n_active = active.iter().filter(|&&a| a).count() as u64;
+        if done >= ceiling || n_active == 0 {
+            if deadline.is_none() {
                 break;
             }
-        }
-        let n_active = active.iter().filter(|&&a| a).count() as u64;
-        if n_active == 0 {
-            break;
+            extend = true;
+            ceiling = u32::MAX;
+            active.iter_mut().for_each(|a| *a = true);
+            n_active = pixels as u64;
         }
         // passes land on the pilot's ceiling, so the share there is measured
         let stop = if done < pilot_ceiling {
@@ -479,6 +564,16 @@ pub fn render_rw(
             ceiling
         };
         let mut k = step.min(stop - done);
+        if let Some(dl) = deadline {
+            // as many trials as the time left holds, at the rate measured so far
+            let left = dl - t0.elapsed().as_secs_f64();
+            let per_trial = t1.elapsed().as_secs_f64() / phase_trials(spent).max(1.0);
+            let fit = left / (per_trial * n_active as f64).max(1e-12);
+            if fit < 1.0 {
+                break;
+            }
+            k = k.min(fit.min(u32::MAX as f64) as u32);
+        }
         if cap_total != u64::MAX {
             let left = cap_total.saturating_sub(spent);
             k = k.min((left / n_active).min(u32::MAX as u64) as u32);
@@ -495,11 +590,11 @@ pub fn render_rw(
             &mut film,
             &mut vfilm,
         ));
-        let conv = conv_map(&film);
+        let conv = conv_map(&film, &vfilm);
         for (i, t) in trials.iter_mut().enumerate() {
             if active[i] {
                 *t += k;
-                active[i] = !conv[i];
+                active[i] = extend || !conv[i];
             }
         }
         spent += k as u64 * n_active;
@@ -545,10 +640,21 @@ pub fn render_rw(
             }
         }
     }
-    let unfiltered = sum_means(&film, vis);
+    let mut unfiltered = sum_means(&film, vis);
+    let mut correction_alpha = 0.0;
+    if correction_samples > 0 {
+        let (add, alpha) = rw_bias::correction(&cfilms[0], &cfilms[1]);
+        correction_alpha = alpha;
+        for ((o, u), a) in out.image.iter_mut().zip(unfiltered.iter_mut()).zip(&add) {
+            for c in 0..3 {
+                o[c] += a[c];
+                u[c] += a[c];
+            }
+        }
+    }
     let filter_seconds = t2.elapsed().as_secs_f64();
     progress.finish();
-    let final_conv = conv_map(&film);
+    let final_conv = conv_map(&film, &vfilm);
     let conv = final_conv.iter().filter(|&&c| c).count();
     let share_at_pilot_ceiling = share_at_pilot_ceiling.unwrap_or_else(|| share(&final_conv));
     let np = pixels.max(1) as f64;
@@ -572,6 +678,8 @@ pub fn render_rw(
         spread_share: out.spread_pixels as f64 / np,
         filter_passes: out.passes,
         untreated: out.untreated,
+        correction_samples,
+        correction_alpha,
         pilot_seconds,
         trials_seconds,
         filter_seconds,
@@ -687,7 +795,7 @@ mod tests {
     #[test]
     fn pilot_predicts_convergence_on_cornell() {
         let mut j = job("cornell", 100, 5.0);
-        j.gather = crate::integrator::Gather::Radiosity;
+        j.gather = Some(crate::integrator::Gather::Radiosity);
         j.radiosity.source_level = 0;
         assert!(converged_share(j) >= 0.9);
     }
