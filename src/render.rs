@@ -446,7 +446,11 @@ pub fn choose_method(
         (None, Some(n)) => n as f64,
         (None, None) => scene.defaults.spp.unwrap_or(DEFAULT_SPP) as f64,
     };
-    j.integrator = Some(kind);
+    // (named only where it differs from what no name gives: a plain render's film key is
+    // then the same as that of the same render asked for with `--method plain`)
+    if kind != job.integrator_for(scene) {
+        j.integrator = Some(kind);
+    }
     let method = if spp >= AUTO_DTF_MIN_SPP {
         j.method = Method::Dtf;
         j.dtf.keep_converged = j.dtf.keep_converged.or(Some(AUTO_KEEP_CONVERGED));

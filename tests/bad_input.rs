@@ -253,7 +253,7 @@ fn bad_options_give_one_line_errors_naming_the_option() {
         (
             "radiosity L~ without the estimate roulette",
             &["--rr-estimate", "radiosity"],
-            &["--rr-estimate radiosity", "--rr classic"],
+            &["--rr-estimate radiosity", "--rr estimate"],
         ),
         (
             "radiosity L~ under bdpt",

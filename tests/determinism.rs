@@ -57,7 +57,9 @@ fn shards_merge_into_the_one_process_image() {
             String::from_utf8_lossy(&o.stderr).to_string(),
         )
     };
-    let base = ["render", "cornell", "--res", "40x30", "-q"];
+    let base = [
+        "render", "cornell", "--method", "plain", "--res", "40x30", "-q",
+    ];
     let part = |first: &str, spp: &str, out: &str, extra: &[&str]| {
         let mut a: Vec<&str> = base.to_vec();
         a.extend(["--first-sample", first, "--spp", spp, "-o", out]);

@@ -415,7 +415,10 @@ fn render(
     let job_json = serde_json::to_string(&job).unwrap_or_default();
     // (the method rendered: `--method auto` may have chosen plain)
     let film = if r.stats.method == kalos::render::Method::Plain {
-        let f = r.film_file(&job);
+        // the film holds the job as rendered: the same as `--method plain` asks for
+        let mut rendered = job.clone();
+        rendered.method = r.stats.method;
+        let f = r.film_file(&rendered);
         Some(Py::new(py, NativeFilm { f })?)
     } else {
         None

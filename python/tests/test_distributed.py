@@ -18,7 +18,7 @@ import kalos.distributed
 
 pytest.importorskip("distributed")
 
-OPTS = dict(res=(48, 48), seed=3)
+OPTS = dict(res=(48, 48), seed=3, method="plain")
 SPP = 64
 
 

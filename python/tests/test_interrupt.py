@@ -11,7 +11,7 @@ import pytest
 import kalos
 
 # About 4e9 samples: hours of work, so an early end can only be the interrupt.
-LONG = dict(spp=60000, res=(256, 256), threads=1)
+LONG = dict(spp=60000, res=(256, 256), threads=1, method="plain")
 
 
 def interrupt_by_signal():
@@ -65,7 +65,7 @@ def test_the_gil_is_released_while_rendering():
     t.start()
     try:
         before = len(ticks)
-        kalos.render("cornell", spp=64, res=(128, 128), threads=1)
+        kalos.render("cornell", spp=64, res=(128, 128), threads=1, method="plain")
         during = len(ticks) - before
     finally:
         stop.set()

@@ -259,7 +259,9 @@ impl Roulette {
     /// Whether the walk may end at reflection `bounce` (0-based).
     #[inline]
     fn active(&self, bounce: u32) -> bool {
-        self.mode != RrMode::Off && bounce >= self.min_depth.unwrap_or(DEFAULT_MIN_DEPTH)
+        // (None: every reflection; a render's settings always name the depth, from the
+        // options, the scene file or `DEFAULT_MIN_DEPTH`)
+        self.mode != RrMode::Off && bounce >= self.min_depth.unwrap_or(0)
     }
 
     /// Continuation probability s at reflection `bounce` of a walk arriving with spectral

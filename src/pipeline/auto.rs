@@ -205,17 +205,9 @@ mod tests {
     #[test]
     fn a_diffuse_box_picks_the_path_tracer() {
         let (j, line) = chosen("cornell", Some(64), |_| {});
-        assert_eq!(
-            (j.method, j.integrator),
-            (Method::Dtf, Some(IntegratorKind::Path)),
-            "{line}"
-        );
+        assert_eq!((j.method, j.integrator), (Method::Dtf, None), "{line}");
         let (j, line) = chosen("cornell", Some(8), |_| {});
-        assert_eq!(
-            (j.method, j.integrator),
-            (Method::Plain, Some(IntegratorKind::Path)),
-            "{line}"
-        );
+        assert_eq!((j.method, j.integrator), (Method::Plain, None), "{line}");
         assert!(line.contains("about 8 spp fit the budget"), "{line}");
     }
 
@@ -243,11 +235,7 @@ mod tests {
     fn the_choice_is_stable_over_seeds() {
         for seed in 1..4 {
             let (j, line) = chosen("cornell", Some(64), |j| j.seed = seed);
-            assert_eq!(
-                j.integrator,
-                Some(IntegratorKind::Path),
-                "seed {seed}: {line}"
-            );
+            assert_eq!(j.integrator, None, "seed {seed}: {line}");
             let (j, line) = chosen("caustic", Some(64), |j| j.seed = seed);
             assert_eq!(
                 j.integrator,
