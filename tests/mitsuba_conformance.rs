@@ -47,14 +47,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
         "normalmap and the anisotropic rough conductor (alpha_u 0.25, alpha_v 0.05) disagree",
     ),
     (
-        "test_roughplastic_linear_path",
-        "about 0.5% of pixel-channels off since plastic's base is scaled once; not the film filter (the file asks for a box)",
-    ),
-    (
-        "test_roughplastic_nonlinear_path",
-        "about 0.5% of pixel-channels off since plastic's base is scaled once; not the film filter (the file asks for a box)",
-    ),
-    (
         "test_textured_roughconductor_path",
         "a bitmap roughness is rendered with its mean",
     ),

@@ -181,6 +181,8 @@ pub struct RwStats {
     /// weight alpha (0: the lookup kept, 1: the correction taken whole).
     pub correction_samples: u32,
     pub correction_alpha: f64,
+    /// Standard error of the image mean's luminance the correction adds (its noise).
+    pub correction_se: f64,
     pub pilot_seconds: f64,
     pub trials_seconds: f64,
     pub filter_seconds: f64,
@@ -641,11 +643,16 @@ pub fn render_rw(
         }
     }
     let mut unfiltered = sum_means(&film, vis);
-    let mut correction_alpha = 0.0;
+    let (mut correction_alpha, mut correction_se) = (0.0, 0.0);
     if correction_samples > 0 {
-        let (add, alpha) = rw_bias::correction(&cfilms[0], &cfilms[1]);
-        correction_alpha = alpha;
-        for ((o, u), a) in out.image.iter_mut().zip(unfiltered.iter_mut()).zip(&add) {
+        let corr = rw_bias::correction(&cfilms[0], &cfilms[1]);
+        (correction_alpha, correction_se) = (corr.alpha, corr.mean_se);
+        for ((o, u), a) in out
+            .image
+            .iter_mut()
+            .zip(unfiltered.iter_mut())
+            .zip(&corr.add)
+        {
             for c in 0..3 {
                 o[c] += a[c];
                 u[c] += a[c];
@@ -680,6 +687,7 @@ pub fn render_rw(
         untreated: out.untreated,
         correction_samples,
         correction_alpha,
+        correction_se,
         pilot_seconds,
         trials_seconds,
         filter_seconds,
@@ -729,13 +737,14 @@ mod tests {
     #[test]
     fn furnace_stays_one() {
         let scene = crate::scene::load("furnace").unwrap();
-        let mut j = job("furnace", 16, 5.0);
+        let mut j = job("furnace", 32, 5.0);
         j.rw.pilot_res = 32;
         let r = render_scene(&scene, &j, &crate::progress::Silent).unwrap();
         let run = r.rw.as_ref().unwrap();
         let unf = run.unfiltered.clone();
         let (lf, lu) = (lum_mean(&run.out.image), lum_mean(&unf));
-        let sigma = sigma_of_mean(&run.film);
+        // the trials' noise and the correction's (a few samples per pixel, taken whole)
+        let sigma = sigma_of_mean(&run.film).hypot(run.stats.correction_se);
         eprintln!(
             "furnace rw: filtered {lf:.6}, unfiltered {lu:.6}, sigma {sigma:.2e}, stats {:?}",
             run.stats

@@ -51,17 +51,39 @@ pub fn samples_for(mt: u32) -> u32 {
         .next_multiple_of(2)
 }
 
-/// What the correction adds to each pixel from the two halves' films, and alpha's image
-/// average.
-pub fn correction(a: &Film, b: &Film) -> (Vec<[f64; 3]>, f64) {
+/// What the correction adds to each pixel from the two halves' films.
+pub struct Correction {
+    pub add: Vec<[f64; 3]>,
+    /// alpha's image average.
+    pub alpha: f64,
+    /// Standard error of the luminance the correction adds to the image's mean, taken
+    /// whole (alpha 1) and before the box: sqrt(sum_p (D_a,p - D_b,p)^2 / 4) / P, the two
+    /// halves' pixel means being independent estimates of one mean.
+    pub mean_se: f64,
+}
+
+/// The correction from the two halves' films. (With one sample per half, the smallest
+/// budgets, a half's variance reads 0 and alpha is 1 wherever D-bar is not 0: the
+/// correction is then taken whole, which is unbiased; its noise is the box's.)
+pub fn correction(a: &Film, b: &Film) -> Correction {
     let (da, wa) = pooled(a);
     let (db, wb) = pooled(b);
     let n = da.len().max(1) as f64;
-    let out = (0..da.len())
+    let add = (0..da.len())
         .map(|i| std::array::from_fn(|c| 0.5 * (wa[i] * db[i][c] + wb[i] * da[i][c])))
         .collect();
     let alpha = wa.iter().chain(&wb).sum::<f64>() / (2.0 * n);
-    (out, alpha)
+    let var: f64 = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (luminance(p.mean()) - luminance(q.mean())).powi(2) / 4.0)
+        .sum();
+    Correction {
+        add,
+        alpha,
+        mean_se: var.sqrt() / n,
+    }
 }
 
 /// Each pixel's D-bar (over its box) and its weight alpha.
@@ -132,7 +154,8 @@ mod tests {
     #[test]
     fn alpha_follows_the_bias_against_its_noise() {
         let two = |n: u32, bias: f32, noise: f32| {
-            correction(&film(8, 8, n, bias, noise), &film(8, 8, n + 1, bias, noise))
+            let c = correction(&film(8, 8, n, bias, noise), &film(8, 8, n + 1, bias, noise));
+            (c.add, c.alpha)
         };
         let (c, a) = two(64, -0.1, 0.01);
         assert!(a > 0.99, "{a}");
