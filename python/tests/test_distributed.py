@@ -153,7 +153,9 @@ def test_scheduler_and_workers_as_separate_processes(reference, cli, tmp_path):
             assert same(img, reference)
             # the CLI's front end: the same EXR file, byte for byte, as without --dask
             os.environ["KALOS_PYTHON"] = sys.executable
-            args = ["render", "cornell", "--spp", SPP, "--res", "48x48", "--seed", 3, "--aovs"]
+            # (--dask renders plainly where no method is named: compared with --method plain)
+            args = ["render", "cornell", "--spp", SPP, "--res", "48x48", "--seed", 3, "--aovs",
+                    "--method", "plain"]
             r = cli(*args, "--dask", addr, "--dask-chunk-spp", 16, "-o", tmp_path / "d.exr",
                     "--stats", tmp_path / "d.json")
             assert "4 parts" in r.stderr and (tmp_path / "d.json").is_file()

@@ -76,14 +76,16 @@ def test_dtf_and_rw_images_equal_the_cli(tmp_path, cli, opts):
 
 
 def test_options_and_defaults_are_the_clis(tmp_path, cli):
-    # the job the CLI records in a film file with no options is kalos.job() with none
+    # the job the CLI records in a film file with no options is kalos.job() with none,
+    # its method as rendered (a film file is a plain render's: the default auto is plain)
     film = tmp_path / "d.kfilm"
     cli("render", "cornell", "-q", "--spp", "1", "--res", "8x8", "-o", film)
     cli_job = kalos.Film.read(film).job
-    assert cli_job == kalos.job("cornell", spp=1, res=(8, 8))
+    assert cli_job == kalos.job("cornell", spp=1, res=(8, 8), method="plain")
     d = kalos.defaults()
-    assert {k: v for k, v in cli_job.items() if k not in ("scene", "spp", "res")} == {
-        k: v for k, v in d.items() if k not in ("scene", "spp", "res")
+    assert d["method"] == "auto"
+    assert {k: v for k, v in cli_job.items() if k not in ("scene", "spp", "res", "method")} == {
+        k: v for k, v in d.items() if k not in ("scene", "spp", "res", "method")
     }
     # every option in the table is one of `kalos render --help`'s, with its default
     help_text = cli("render", "--help").stdout
@@ -95,7 +97,7 @@ def test_options_and_defaults_are_the_clis(tmp_path, cli):
     # a job with many options set: the CLI's film records the module's job
     opts = dict(spp=1, res=(8, 8), rr="spectral-estimate", rr_weight="flat", bsdf_select="mis",
                 dtf_categories=(0, 5, 9), dtf_no_cost=True, rw_no_filter=True, max_depth=-1,
-                camera=(0, 1, 3.5, 0, 1, 0, 0, 1, 0, 40), seed=11, dependent=True)
+                camera=(0, 1, 3.5, 0, 1, 0, 0, 1, 0, 40), seed=11, dependent=True, method="plain")
     cli("render", "cornell", "-q", *cli_args(opts), "-o", film)
     assert kalos.Film.read(film).job == kalos.job("cornell", **opts)
     j = kalos.job("cornell", **opts)
