@@ -95,3 +95,35 @@ pub fn parse_threads(s: &str) -> Result<usize, String> {
     }
     Ok(n)
 }
+
+/// Which estimator (`integrator/`): here, below the scene, because a scene file may
+/// name its own.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum IntegratorKind {
+    /// Unidirectional path tracing, next-event estimation + MIS (with `--gather
+    /// radiosity`: Rushmeier and Ward's path tracer reading a radiosity solution).
+    #[default]
+    Path,
+    /// Bidirectional path tracing: every (s, t) strategy, MIS, light-tracing splats.
+    Bdpt,
+    /// The radiosity solution seen directly (a preview): emitters plus B / pi at the first
+    /// non-specular hit, mirrors and glass followed.
+    Radiosity,
+    /// Test only: every sample returns 0 and splats (x, y, 1) into the pixel to its right
+    /// (wrapping), so the image is known exactly.
+    #[cfg(test)]
+    #[value(skip)]
+    #[serde(skip)]
+    SplatTest,
+}

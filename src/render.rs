@@ -10,20 +10,21 @@
 use crate::film::Film;
 use crate::filter::dtf::DtfParams;
 use crate::image_io::RgbImage;
-use crate::integrator::{
-    Counters, Gather, Integrator, IntegratorKind, IntegratorSettings, MisHeuristic, Roulette,
-};
+use crate::integrator::{Gather, IntegratorKind, IntegratorSettings, MisHeuristic, Roulette};
 use crate::options::{
     name, parse_define, parse_depth, parse_res, parse_seconds, parse_spp, parse_threads,
 };
-use crate::pipeline::{
-    self, Budget, DtfBudget, DtfRun, Progress, RenderSettings, RwBudget, RwParams, RwRun, RwStats,
-};
+use crate::pipeline::{self, DtfRun, Progress, RenderSettings, RwParams, RwRun};
 use crate::radiosity::RadiositySettings;
 use crate::sampling::{SamplerConfig, SamplerKind};
 use crate::scene::{CameraDesc, Scene};
 use crate::spectrum::SpectralMode;
 use serde::{Deserialize, Serialize};
+
+mod run;
+mod stats;
+pub use run::{default_spp, render_dtf_part, render_dtf_with, render_scene, JobBudget};
+pub use stats::{DtfStats, RenderStats, RunFigures};
 
 /// Rendering method.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
@@ -252,70 +253,6 @@ impl RenderJob {
     }
 }
 
-/// Statistics of a render (`--stats`, Python's `result.stats`).
-#[derive(Clone, Debug, Serialize)]
-pub struct RenderStats {
-    pub scene: String,
-    pub width: u32,
-    pub height: u32,
-    pub spp: u32,
-    pub first_sample: u64,
-    pub seconds: f64,
-    pub paths: u64,
-    pub rays: u64,
-    pub paths_per_second: f64,
-    pub rays_per_second: f64,
-    pub bvh_build_seconds: f64,
-    pub load_seconds: f64,
-    pub prepare_seconds: f64,
-    pub rejected_samples: u64,
-    pub rejected_nan: u64,
-    pub rejected_infinite: u64,
-    pub threads: usize,
-    pub spectral: String,
-    pub sampler: SamplerKind,
-    pub dependent: bool,
-    pub max_depth: i32,
-    pub integrator: IntegratorKind,
-    pub rr: crate::integrator::RrMode,
-    pub rr_weight: crate::integrator::RrWeight,
-    pub rr_min_depth: u32,
-    pub bsdf_select: crate::integrator::BsdfSelect,
-    pub seed: u64,
-    pub method: Method,
-    /// What `--method auto` chose and why, in one line.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub method_choice: Option<String>,
-    pub interrupted: bool,
-    /// Instruction set of the BVH traversal (`accel::Isa`: sse2, avx2).
-    pub simd: &'static str,
-    pub mean_rgb: [f64; 3],
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub dtf: Option<DtfStats>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rw: Option<RwStats>,
-}
-
-/// DTF's share of the statistics.
-#[derive(Clone, Debug, Serialize)]
-pub struct DtfStats {
-    pub n: u32,
-    pub average_n: f64,
-    pub phase1_seconds: f64,
-    pub phase2_seconds: f64,
-    pub filter_seconds: f64,
-    pub filter_share: f64,
-    pub average_region: f64,
-    /// Over BDPT with `--dtf-light auto`: light paths traced for light tracing alone, the
-    /// share of phase 2 they took, and phase 1's share of the variance in the splats.
-    pub light_paths: u64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub light_share: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub splat_variance_share: Option<f64>,
-    pub params: DtfParams,
-}
-
 /// A finished render.
 pub struct Rendered {
     /// The displayed image (plain: the film's values; dtf: the combined image).
@@ -444,7 +381,7 @@ pub fn choose_method(
     let spp = match (job.time, job.spp) {
         (Some(t), _) => (t - pilot_seconds).max(0.0) / chosen.seconds_per_spp.max(1e-12),
         (None, Some(n)) => n as f64,
-        (None, None) => scene.defaults.spp.unwrap_or(DEFAULT_SPP) as f64,
+        (None, None) => default_spp(scene) as f64,
     };
     // (named only where it differs from what no name gives: a plain render's film key is
     // then the same as that of the same render asked for with `--method plain`)
@@ -466,258 +403,6 @@ pub fn choose_method(
     Ok((j, Some(line)))
 }
 
-/// Render an already loaded scene as the job says (the job's `scene` only names it).
-pub fn render_scene(
-    scene: &Scene,
-    job: &RenderJob,
-    progress: &dyn Progress,
-) -> Result<Rendered, String> {
-    job.validate()?;
-    let set = job.settings(scene);
-    crate::film::check_resolution(set.width, set.height)?;
-    let (pool, thread_warning) = thread_pool(job.threads)?;
-    let mut warnings: Vec<String> = thread_warning.into_iter().collect();
-    // (the pilot of `--method auto` is part of the preprocess: `--time` counts it)
-    let t_prep = std::time::Instant::now();
-    let (job, choice) = pool.install(|| choose_method(scene, job, &set, progress))?;
-    let job = &job;
-    let set = job.settings(scene);
-    // DTF's spp budget is the average over both phases: phase 1's n must fit in it
-    // (checked before any work, with the scene's default spp known)
-    if let (Method::Dtf, None) = (job.method, job.time) {
-        let spp = job.spp.or_else(|| {
-            (job.dtf.eps_r.is_none()).then(|| scene.defaults.spp.unwrap_or(DEFAULT_SPP))
-        });
-        if let Some(spp) = spp {
-            let n = job.dtf.n_for(Some(spp as f64), false);
-            if spp < n {
-                return Err(format!(
-                    "--spp {spp}: in DTF budget mode it is the average over both phases and must be at least --dtf-n {n}"
-                ));
-            }
-        }
-    }
-    if job.integrator_for(scene) == IntegratorKind::Bdpt {
-        warnings.extend(set.camera.for_light_paths()?);
-    }
-    // Say what a large render will cost before it starts.
-    let pixels = set.width as u64 * set.height as u64;
-    let planned = match (job.method, job.time, job.spp) {
-        (_, Some(_), _) => None,
-        (_, None, Some(n)) => Some(n as u64 * pixels),
-        (Method::Dtf, None, None) if job.dtf.eps_r.is_some() => None,
-        (_, None, None) => Some(scene.defaults.spp.unwrap_or(DEFAULT_SPP) as u64 * pixels),
-    };
-    if let Some(total) = planned.filter(|&t| t >= LARGE_RENDER_SAMPLES) {
-        progress.message(&format!(
-            "{total} samples planned ({pixels} pixels): about {:.1} hours at 1 M samples/s; \
-             Ctrl-C writes what is done",
-            total as f64 / 1e6 / 3600.0
-        ));
-    }
-    if let (Method::Dtf, None, None, Some(e)) = (job.method, job.time, job.spp, job.dtf.eps_r) {
-        progress.message(&format!(
-            "dtf with eps_r = {e}: the work depends on phase 1 and is known after it"
-        ));
-    }
-    let integrator = pool
-        .install(|| Integrator::prepare(scene, set.integrator, set.spectral.bands(), progress))?;
-    let prepare_seconds = t_prep.elapsed().as_secs_f64();
-    // --time covers the preprocess too (equal-time comparisons count it).
-    let time_left = job.time.map(|t| {
-        if prepare_seconds >= t {
-            warnings.push(format!(
-                "--time {t}: the preprocess took {prepare_seconds:.2} s of it; rendering one pass"
-            ));
-        }
-        (t - prepare_seconds).max(0.0)
-    });
-
-    let mut rw_run: Option<RwRun> = None;
-    let (film, image, counters, seconds, spp, interrupted, dtf_stats, dtf_run): (
-        Film,
-        RgbImage,
-        Counters,
-        f64,
-        u32,
-        bool,
-        Option<DtfStats>,
-        Option<DtfRun>,
-    ) = match job.method {
-        Method::Dtf => {
-            let params = &job.dtf;
-            let budget = match (time_left, job.spp) {
-                (Some(t), _) => DtfBudget::Time(t),
-                (None, Some(n)) => DtfBudget::Spp(n as f64),
-                (None, None) if params.eps_r.is_some() => DtfBudget::RelativeError,
-                // the same average samples per pixel as a plain render of the scene
-                (None, None) => DtfBudget::Spp(scene.defaults.spp.unwrap_or(DEFAULT_SPP) as f64),
-            };
-            let run = pool.install(|| {
-                pipeline::render_dtf(scene, &integrator, &set, params, budget, progress)
-            })?;
-            let mut film = run.independent.clone();
-            film.merge(&run.dependent);
-            let stats = DtfStats {
-                n: run.n,
-                average_n: run.average_n(),
-                phase1_seconds: run.phase1_seconds,
-                phase2_seconds: run.phase2_seconds,
-                filter_seconds: run.filter_seconds,
-                filter_share: run.filter_seconds / run.seconds,
-                average_region: run.out.region.iter().map(|&m| m as f64).sum::<f64>()
-                    / run.out.region.len() as f64,
-                light_paths: run.light_paths,
-                light_share: run.light_plan.map(|p| p.share),
-                splat_variance_share: run.light_plan.map(|p| p.splat_variance_share),
-                params: params.clone(),
-            };
-            let spp = (film.total_samples() as f64 / (set.width as f64 * set.height as f64)).round()
-                as u32;
-            let mut image = run.out.combined.clone();
-            if let (Some(tau), None) = (params.keep_converged, &run.direct) {
-                crate::filter::dtf::keep_converged(&mut image, &run.independent, tau as f64);
-            }
-            (
-                film,
-                image,
-                run.counters,
-                run.seconds,
-                spp,
-                false,
-                Some(stats),
-                Some(run),
-            )
-        }
-        Method::Rw => {
-            let budget = match (time_left, job.spp) {
-                (Some(t), _) => RwBudget::Time(t),
-                (None, Some(n)) => RwBudget::Spp(n as f64),
-                (None, None) => RwBudget::Convergence,
-            };
-            let run = pool.install(|| {
-                pipeline::render_rw(scene, &integrator, &set, &job.rw, budget, progress)
-            })?;
-            let spp = run.stats.average_trials.round() as u32;
-            let data: Vec<[f32; 3]> = run.out.image.iter().map(|c| c.map(|v| v as f32)).collect();
-            let image = RgbImage::new(set.width, set.height, data);
-            let (film, counters, seconds) = (run.film.clone(), run.counters, run.seconds);
-            rw_run = Some(run);
-            (
-                film,
-                image,
-                counters,
-                seconds,
-                spp,
-                progress.cancelled(),
-                None,
-                None,
-            )
-        }
-        // (`choose_method` has made auto concrete)
-        Method::Plain | Method::Auto => {
-            let budget = match (time_left, job.spp) {
-                (Some(t), _) => Budget::Time(t),
-                (None, Some(n)) => Budget::Spp(n),
-                (None, None) => Budget::Spp(scene.defaults.spp.unwrap_or(DEFAULT_SPP)),
-            };
-            let out = pool.install(|| {
-                pipeline::render(scene, &integrator, &set, budget, job.first_sample, progress)
-            })?;
-            let img = RgbImage::new(set.width, set.height, out.film.mean_rgb());
-            (
-                out.film,
-                img,
-                out.counters,
-                out.seconds,
-                out.spp,
-                out.interrupted,
-                None,
-                None,
-            )
-        }
-    };
-    let mut image = image;
-    if let Some(PostFilter::Energy) = job.post_filter {
-        image = energy_post_filter(&film, &image, &job.rw)?;
-    }
-    let rej = film.rejected;
-    if rej.total() > 0 {
-        warnings.push(format!(
-            "rejected {} samples ({} NaN, {} infinite or above {:e}); they are not in the image",
-            rej.total(),
-            rej.nan,
-            rej.infinite,
-            crate::film::SAMPLE_MAX
-        ));
-    }
-    // (a scene without emitters has said so when it was loaded)
-    if !interrupted
-        && !scene.lights.is_empty()
-        && film.total_samples() > 0
-        && image.data.iter().all(|p| *p == [0.0; 3])
-    {
-        let camera = if job.camera.is_some() {
-            "the camera given with --camera".to_string()
-        } else {
-            format!(
-                "the camera ({}: `kalos info` prints it)",
-                scene.info.camera_from
-            )
-        };
-        warnings.push(format!(
-            "the image is all black: check that {camera} looks at the lit side of the scene \
-             (inside a closed room, not at its outer walls) and that the emitters face what \
-             it sees (an emitter shines only on its counter-clockwise side)"
-        ));
-    }
-    let stats = RenderStats {
-        scene: scene.info.name.clone(),
-        width: set.width,
-        height: set.height,
-        spp,
-        first_sample: job.first_sample,
-        seconds,
-        paths: counters.paths,
-        rays: counters.rays,
-        paths_per_second: counters.paths as f64 / seconds,
-        rays_per_second: counters.rays as f64 / seconds,
-        bvh_build_seconds: scene.info.bvh_seconds,
-        load_seconds: scene.info.load_seconds,
-        prepare_seconds,
-        rejected_samples: rej.total(),
-        rejected_nan: rej.nan,
-        rejected_infinite: rej.infinite,
-        threads: pool.current_num_threads(),
-        spectral: name(&set.spectral),
-        sampler: job.sampler,
-        dependent: job.dependent,
-        max_depth: set.integrator.max_depth,
-        integrator: set.integrator.kind,
-        rr: job.roulette.mode,
-        rr_weight: job.roulette.weight,
-        rr_min_depth: set.integrator.roulette.min_depth.unwrap_or(0),
-        bsdf_select: job.roulette.select,
-        seed: job.seed,
-        method: job.method,
-        method_choice: choice,
-        interrupted,
-        simd: scene.bvh.isa().name(),
-        mean_rgb: image.mean(),
-        dtf: dtf_stats,
-        rw: rw_run.as_ref().map(|r| r.stats.clone()),
-    };
-    Ok(Rendered {
-        image,
-        film,
-        stats,
-        dtf: dtf_run,
-        rw: rw_run,
-        warnings,
-        key: job.key(scene.content_hash),
-    })
-}
-
 /// BDPT's strategy images of `job` (`pipeline::strategies`: an `--integrator bdpt` job,
 /// a fixed number of samples) for the path lengths up to `max_length` (and the job's
 /// --max-depth, if smaller), on the job's thread pool.
@@ -733,7 +418,7 @@ pub fn render_strategies(
     crate::film::check_resolution(set.width, set.height)?;
     let spp = match (job.spp, job.time) {
         (Some(n), _) => n,
-        (None, None) => scene.defaults.spp.unwrap_or(DEFAULT_SPP),
+        (None, None) => default_spp(scene),
         (None, Some(_)) => {
             return Err("--bdpt-strategies: give --spp (the strategy images are a fixed number of samples, not --time)".into())
         }
@@ -859,6 +544,29 @@ mod tests {
         assert!(r.film.total_samples() >= 64, "one pass is rendered");
     }
 
+    /// The budget of each method without one, and the one default samples per pixel.
+    #[test]
+    fn each_method_spends_its_own_budget_without_one() {
+        let scene = crate::scene::load("cornell").unwrap();
+        let mut j = RenderJob::new("cornell");
+        assert_eq!(j.budget(&scene), JobBudget::Spp(DEFAULT_SPP));
+        j.method = Method::Rw;
+        assert_eq!(j.budget(&scene), JobBudget::Convergence);
+        j.method = Method::Dtf;
+        assert_eq!(j.budget(&scene), JobBudget::Spp(DEFAULT_SPP));
+        j.dtf.eps_r = Some(0.1);
+        assert_eq!(j.budget(&scene), JobBudget::RelativeError);
+        j.spp = Some(7);
+        assert_eq!(j.budget(&scene), JobBudget::Spp(7));
+        j.spp = None;
+        j.time = Some(2.5);
+        assert_eq!(j.budget(&scene), JobBudget::Time(2.5));
+        let mut s4 = crate::scene::load("cornell").unwrap();
+        s4.defaults.spp = Some(4);
+        assert_eq!(RenderJob::new("cornell").budget(&s4), JobBudget::Spp(4));
+        assert_eq!(default_spp(&s4), 4);
+    }
+
     #[test]
     fn key_ignores_the_sample_range_only() {
         let mut a = RenderJob::new("cornell");
@@ -880,22 +588,4 @@ mod tests {
 pub enum PostFilter {
     /// Rushmeier and Ward's energy-preserving filter.
     Energy,
-}
-
-/// The energy-preserving filter on a finished image: each pixel's value from the image,
-/// its deviation S_p and trial count M from the film, Lt_vis from the image's mean.
-fn energy_post_filter(film: &Film, image: &RgbImage, rw: &RwParams) -> Result<RgbImage, String> {
-    use crate::filter::energy;
-    let mean: Vec<[f64; 3]> = image.data.iter().map(|c| c.map(|v| v as f64)).collect();
-    let s: Vec<f64> = film.pixels.iter().map(energy::deviation).collect();
-    let m: Vec<u32> = film.pixels.iter().map(|p| p.n).collect();
-    let p = energy::EnergyParams {
-        d: rw.d,
-        lt_vis: energy::lt_vis(energy::l_ave(&mean)),
-        t: rw.t,
-    };
-    let out = energy::energy_filter(image.width, image.height, &mean, &s, &m, &p)
-        .map_err(|e| format!("--filter energy: {e}"))?;
-    let data = out.image.iter().map(|c| c.map(|v| v as f32)).collect();
-    Ok(RgbImage::new(image.width, image.height, data))
 }

@@ -32,11 +32,11 @@ const ORDER: &[&str] = &[
 ];
 
 /// Back edges the code still has (module, imported module, why): the scene's lights read
-/// its textures, and a scene file may name its estimator.
-const KNOWN: &[(&str, &str)] = &[("light", "scene"), ("scene", "integrator")];
+/// its textures.
+const KNOWN: &[(&str, &str)] = &[("light", "scene")];
 
-/// Files whose circles are still known (the scene naming its estimator, above).
-const KNOWN_CIRCLE_EDGES: &[(&str, &str)] = &[("scene/mod.rs", "integrator/mod.rs")];
+/// Files whose circles are still known.
+const KNOWN_CIRCLE_EDGES: &[(&str, &str)] = &[];
 
 /// Every non-test source file (path relative to `src/`, text without test modules and
 /// comments).

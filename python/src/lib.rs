@@ -11,7 +11,7 @@
 use kalos::film::{film_from_bytes, film_to_bytes, merge_files, read_film, write_film, FilmFile};
 use kalos::image_io::RgbImage;
 use kalos::progress::Progress;
-use kalos::render::{RenderJob, DEFAULT_SPP};
+use kalos::render::{default_spp, RenderJob, DEFAULT_SPP};
 use kalos::scene::Scene;
 use pyo3::exceptions::{PyException, PyFileNotFoundError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -131,7 +131,7 @@ impl NativeScene {
             .and_then(|t| serde_json::from_str(&t))
             .unwrap_or_default();
         v["spec"] = serde_json::json!(self.spec);
-        v["default_spp"] = serde_json::json!(s.defaults.spp.unwrap_or(DEFAULT_SPP));
+        v["default_spp"] = serde_json::json!(default_spp(s));
         v["default_res"] = serde_json::json!(s.defaults.res);
         v["default_max_depth"] = serde_json::json!(s.defaults.max_depth);
         v["warnings"] = serde_json::json!(s.warnings_for(false));
@@ -145,7 +145,7 @@ impl NativeScene {
     /// Samples per pixel when a render gives none (the scene file's, else 64).
     #[getter]
     fn default_spp(&self) -> u32 {
-        self.scene.defaults.spp.unwrap_or(DEFAULT_SPP)
+        default_spp(&self.scene)
     }
 }
 
@@ -410,9 +410,23 @@ fn render(
         return Err(e);
     }
     let r = r.map_err(value_error)?;
+    let mut warnings = scene.scene.warnings_for(job.camera.is_some());
+    warnings.extend(r.warnings.iter().cloned());
+    native_rendered(py, &job, r, warnings, &progress)
+}
+
+/// A finished render as the module returns it: arrays, statistics (the library's, as
+/// `--stats` prints them), the job, warnings, messages and, for a plain render, its film.
+fn native_rendered(
+    py: Python<'_>,
+    job: &RenderJob,
+    r: kalos::Rendered,
+    warnings: Vec<String>,
+    progress: &PyProgress,
+) -> PyResult<NativeRendered> {
     let (width, height, image, variance, count) = film_arrays(py, &r.film, &r.image);
     let stats = serde_json::to_string(&r.stats).unwrap_or_default();
-    let job_json = serde_json::to_string(&job).unwrap_or_default();
+    let job_json = serde_json::to_string(job).unwrap_or_default();
     // (the method rendered: `--method auto` may have chosen plain)
     let film = if r.stats.method == kalos::render::Method::Plain {
         // the film holds the job as rendered: the same as `--method plain` asks for
@@ -423,8 +437,6 @@ fn render(
     } else {
         None
     };
-    let mut warnings = scene.scene.warnings_for(job.camera.is_some());
-    warnings.extend(r.warnings);
     Ok(NativeRendered {
         width,
         height,
@@ -619,7 +631,7 @@ fn render_dtf_part<'py>(
     rest: bool,
 ) -> PyResult<PartBytes<'py>> {
     use kalos::integrator::bdpt::LtRatio;
-    use kalos::pipeline::{run_dtf_pass, run_dtf_pass_rest, Counts, DtfPass, Silent};
+    use kalos::pipeline::{Counts, DtfPass};
     let job = parse_job(&scene.spec, &argv).map_err(value_error)?;
     let sc = scene.scene.clone();
     let out = py.detach(move || -> Result<PartOut, String> {
@@ -637,61 +649,39 @@ fn render_dtf_part<'py>(
             })),
             None => None,
         };
-        let (pool, _) = kalos::render::thread_pool(job.threads)?;
-        pool.install(|| {
-            let integ = kalos::integrator::Integrator::prepare(
-                &sc,
-                set.integrator,
-                set.spectral.bands(),
-                &Silent,
-            )?;
-            let pass = DtfPass {
-                lt_ratio: k.as_ref(),
-                light_paths,
-                rest,
-                ..DtfPass::samples(
-                    dependent,
-                    stream,
-                    match &per_pixel {
-                        Some(v) => Counts::PerPixel(v),
-                        None => Counts::Uniform(n),
-                    },
-                    rays,
-                )
-            };
-            let (film, rest_film, r, c) = if rest {
-                let (f, rf, r, c) = run_dtf_pass_rest(&sc, &integ, &set, &pass, first, &Silent)?;
-                (f, Some(rf), r, c)
+        let pass = DtfPass {
+            lt_ratio: k.as_ref(),
+            light_paths,
+            rest,
+            ..DtfPass::samples(
+                dependent,
+                stream,
+                match &per_pixel {
+                    Some(v) => Counts::PerPixel(v),
+                    None => Counts::Uniform(n),
+                },
+                rays,
+            )
+        };
+        // the part's range: sample indices, or light-path numbers of a light pass
+        let end = first
+            + if light_paths > 0 {
+                light_paths
             } else {
-                let (f, r, c) = run_dtf_pass(&sc, &integ, &set, &pass, first, &Silent)?;
-                (f, None, r, c)
+                per_pixel
+                    .as_ref()
+                    .map_or(n, |v| v.iter().copied().max().unwrap_or(0)) as u64
             };
-            // the part's range: sample indices, or light-path numbers of a light pass
-            let end = first
-                + if light_paths > 0 {
-                    light_paths
-                } else {
-                    per_pixel
-                        .as_ref()
-                        .map_or(n, |v| v.iter().copied().max().unwrap_or(0))
-                        as u64
-                };
-            let file = |film| FilmFile {
-                job: serde_json::to_string(&job).unwrap_or_default(),
-                key: job.key(sc.content_hash),
-                ranges: vec![(first, end)],
-                film,
-            };
-            let rb: Vec<u8> = r.iter().flat_map(|x| x.to_le_bytes()).collect();
-            Ok((
-                film_to_bytes(&file(film)),
-                rest_film.map(|f| film_to_bytes(&file(f))),
-                rb,
-                c.paths,
-                c.rays,
-                c.light_rays,
-            ))
-        })
+        let (film, rest_film, r, c) = kalos::render::render_dtf_part(&sc, &job, &pass, first, end)?;
+        let rb: Vec<u8> = r.iter().flat_map(|x| x.to_le_bytes()).collect();
+        Ok((
+            film_to_bytes(&film),
+            rest_film.map(|f| film_to_bytes(&f)),
+            rb,
+            c.paths,
+            c.rays,
+            c.light_rays,
+        ))
     });
     let (fb, restb, rb, paths, nrays, light_rays) = out.map_err(value_error)?;
     Ok((
@@ -848,25 +838,9 @@ fn render_dtf_with(
     argv: Vec<String>,
     run_pass: Bound<'_, PyAny>,
 ) -> PyResult<NativeRendered> {
-    use kalos::pipeline::DtfBudget;
     let job = parse_job(&scene.spec, &argv).map_err(value_error)?;
-    if job.method != kalos::render::Method::Dtf {
-        return Err(PyValueError::new_err(
-            "render_dtf_with: the job is not --method dtf",
-        ));
-    }
     let sc = &scene.scene;
     let set = job.settings(sc);
-    let budget = match (job.time, job.spp) {
-        (Some(_), _) => {
-            return Err(PyValueError::new_err(
-                "time: a distributed render splits a sample budget: give spp, not time",
-            ))
-        }
-        (None, Some(n)) => DtfBudget::Spp(n as f64),
-        (None, None) if job.dtf.eps_r.is_some() => DtfBudget::RelativeError,
-        (None, None) => DtfBudget::Spp(sc.defaults.spp.unwrap_or(DEFAULT_SPP) as f64),
-    };
     let mut passes = PyPasses {
         run_pass: &run_pass,
         error: None,
@@ -874,50 +848,13 @@ fn render_dtf_with(
         height: set.height,
     };
     let progress = PyProgress::default();
-    let r = kalos::pipeline::render_dtf_with(&set, &job.dtf, budget, &progress, &mut passes);
+    let r = kalos::render::render_dtf_with(sc, &job, &mut passes, &progress);
     if let Some(e) = passes.error.take() {
         return Err(e);
     }
-    let run = r.map_err(value_error)?;
-    let mut film = run.independent.clone();
-    film.merge(&run.dependent);
-    let (width, height, image, variance, count) = film_arrays(py, &film, &run.out.combined);
-    let pixels = (set.width as f64) * (set.height as f64);
-    let stats = serde_json::json!({
-        "scene": sc.info.name,
-        "width": set.width,
-        "height": set.height,
-        "spp": (film.total_samples() as f64 / pixels).round() as u32,
-        "method": "dtf",
-        "seed": job.seed,
-        "seconds": run.seconds,
-        "paths": run.counters.paths,
-        "rays": run.counters.rays,
-        "interrupted": false,
-        "mean_rgb": run.out.combined.mean(),
-        "dtf": {
-            "n": run.n,
-            "average_n": run.average_n(),
-            "phase1_seconds": run.phase1_seconds,
-            "phase2_seconds": run.phase2_seconds,
-            "filter_seconds": run.filter_seconds,
-            "light_paths": run.light_paths,
-            "light_share": run.light_plan.map(|p| p.share),
-            "splat_variance_share": run.light_plan.map(|p| p.splat_variance_share),
-        },
-    });
-    Ok(NativeRendered {
-        width,
-        height,
-        image: image.unbind(),
-        variance: variance.unbind(),
-        count: count.unbind(),
-        stats: stats.to_string(),
-        job: serde_json::to_string(&job).unwrap_or_default(),
-        warnings: sc.warnings.clone(),
-        messages: vec![],
-        film: None,
-    })
+    let r = r.map_err(value_error)?;
+    let warnings = r.warnings.clone();
+    native_rendered(py, &job, r, warnings, &progress)
 }
 
 /// The native module.

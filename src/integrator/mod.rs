@@ -35,36 +35,8 @@ use std::sync::Arc;
 /// in closed glass or white rooms; the throughput left there is below f32 precision).
 pub const HARD_MAX_DEPTH: u32 = 1024;
 
-/// Which estimator.
-#[derive(
-    Clone,
-    Copy,
-    Debug,
-    Default,
-    PartialEq,
-    Eq,
-    serde::Serialize,
-    serde::Deserialize,
-    clap::ValueEnum,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum IntegratorKind {
-    /// Unidirectional path tracing, next-event estimation + MIS (with `--gather
-    /// radiosity`: Rushmeier and Ward's path tracer reading a radiosity solution).
-    #[default]
-    Path,
-    /// Bidirectional path tracing: every (s, t) strategy, MIS, light-tracing splats.
-    Bdpt,
-    /// The radiosity solution seen directly (a preview): emitters plus B / pi at the first
-    /// non-specular hit, mirrors and glass followed.
-    Radiosity,
-    /// Test only: every sample returns 0 and splats (x, y, 1) into the pixel to its right
-    /// (wrapping), so the image is known exactly.
-    #[cfg(test)]
-    #[value(skip)]
-    #[serde(skip)]
-    SplatTest,
-}
+/// Which estimator (named in `options`, below the scene that may name it).
+pub use crate::options::IntegratorKind;
 
 /// Settings of an estimator (filled from `RenderJob`, where the options are named).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -197,7 +197,7 @@ pub struct RenderDefaults {
     /// Reflections before Russian roulette starts (`--rr-min-depth`).
     pub rr_min_depth: Option<u32>,
     /// The estimator the file asks for (`--integrator`).
-    pub integrator: Option<crate::integrator::IntegratorKind>,
+    pub integrator: Option<crate::options::IntegratorKind>,
 }
 
 /// A scene as plain data, before acceleration structures are built.

@@ -248,7 +248,7 @@ impl<'a> Loader<'a> {
         if !known_plugin("integrator", kind) {
             return Err(format!("{}: unknown integrator plugin '{kind}'", el.at));
         }
-        use crate::integrator::IntegratorKind;
+        use crate::options::IntegratorKind;
         match kind {
             "path" | "volpath" | "volpathmis" | "prb" | "prbvolpath" | "bdpt" | "ptracer" => {
                 // the file's estimator, or kalos' nearest: the path tracer (the same
