@@ -18,6 +18,15 @@
 //!
 //! The cost is counted in rays, not seconds, so that the same scene, seed and options
 //! choose the same estimator on any machine and thread count.
+//!
+//! The same pilot predicts whether DTF's filter helps at the budget: for each pilot pixel,
+//! r_p = 5% x max(||mu_p||, floor) / sigma_p (the perceptual error's threshold over the
+//! standard deviation of one sample, ||.|| the sum of the channels as in
+//! `metrics::perceptual_error`), so that with n samples the pixel's error exceeds the
+//! threshold with probability erfc(r_p sqrt(n / 2)) (a normal error). Their mean is the
+//! share of pixels plain rendering is predicted to leave more than 5% off
+//! (`predicted_off_share`). Where it is below `DTF_MIN_OFF`, the noise left is lower than
+//! what the filter's bias costs: plain rendering wins (`dtf_helps`).
 
 use super::render::{render, Budget, RenderSettings};
 use crate::film::Film;
@@ -33,6 +42,11 @@ pub const PILOT_MIN_SIDE: u32 = 16;
 /// An estimator misses light when its pilot's mean is below (1 - MISSING) x the other's
 /// (and the difference is significant).
 pub const MISSING: f64 = 0.05;
+/// DTF is chosen only where plain rendering is predicted to leave at least this share of
+/// the pixels more than 5% off at the budget (`dtf_helps`). Calibrated on the Cornell box
+/// and the furnished room at 256x256 (docs/results/auto.md): DTF won where plain rendering
+/// left 5-26% of the pixels off, and lost where it left 0.2%.
+pub const DTF_MIN_OFF: f64 = 0.01;
 
 /// An estimator's seconds per ray against the path tracer's: BDPT evaluates every
 /// connection's BSDFs and MIS weights and splats, beyond its rays. Measured with `kalos
@@ -46,7 +60,7 @@ pub fn ray_cost(kind: IntegratorKind) -> f64 {
 }
 
 /// What the pilot measured of one estimator.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Pilot {
     pub kind: IntegratorKind,
     /// v: the variance of one sample relative to the image.
@@ -60,6 +74,9 @@ pub struct Pilot {
     /// extrapolated from it.
     pub seconds: f64,
     pub seconds_per_spp: f64,
+    /// r_p of each pilot pixel: the perceptual threshold over one sample's standard
+    /// deviation (infinite where the pixel showed no noise).
+    pub threshold_over_sd: Vec<f64>,
 }
 
 impl Pilot {
@@ -93,6 +110,7 @@ pub fn pilot(scene: &Scene, set: &RenderSettings, kind: IntegratorKind) -> Resul
     let out = render(scene, &integrator, &p, Budget::Spp(PILOT_SPP), 0, &Silent)?;
     let seconds = t0.elapsed().as_secs_f64();
     let (rel_var, mean, mean_se) = statistics(&out.film, PILOT_SPP);
+    let threshold_over_sd = thresholds_over_sd(&out.film, PILOT_SPP);
     let pixels = p.width as f64 * p.height as f64;
     let full = set.width as f64 * set.height as f64;
     Ok(Pilot {
@@ -103,7 +121,55 @@ pub fn pilot(scene: &Scene, set: &RenderSettings, kind: IntegratorKind) -> Resul
         mean_se,
         seconds,
         seconds_per_spp: out.seconds / PILOT_SPP as f64 * full / pixels,
+        threshold_over_sd,
     })
+}
+
+/// r_p of each pixel of a film of `spp` samples per pixel: the perceptual error's
+/// threshold (5% of the sum of the channels, at least the floor's share of the image's
+/// mean) over the standard deviation of one sample's sum of the channels (the channels'
+/// deviations added: a path's channels err together).
+pub fn thresholds_over_sd(film: &Film, spp: u32) -> Vec<f64> {
+    use crate::metrics::{PERCEPTUAL_FLOOR, PERCEPTUAL_THRESHOLD};
+    let n = film.pixels.len();
+    let norm = |i: usize| film.value(i).iter().map(|v| v.abs()).sum::<f64>();
+    let floor = PERCEPTUAL_FLOOR * (0..n).map(norm).sum::<f64>() / n.max(1) as f64;
+    (0..n)
+        .map(|i| {
+            let sd = film
+                .variance_of_value(i)
+                .iter()
+                .map(|v| (v.max(0.0) * spp as f64).sqrt())
+                .sum::<f64>();
+            let t = PERCEPTUAL_THRESHOLD * norm(i).max(floor);
+            if sd > 0.0 {
+                t / sd
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect()
+}
+
+/// The share of pixels plain rendering is predicted to leave more than the perceptual
+/// threshold off with `spp` samples per pixel: the mean of erfc(r_p sqrt(spp / 2)).
+pub fn predicted_off_share(threshold_over_sd: &[f64], spp: f64) -> f64 {
+    if threshold_over_sd.is_empty() {
+        return 0.0;
+    }
+    let k = (spp.max(0.0) / 2.0).sqrt();
+    threshold_over_sd
+        .iter()
+        .map(|r| libm::erfc(r * k))
+        .sum::<f64>()
+        / threshold_over_sd.len() as f64
+}
+
+/// Whether DTF is predicted to beat plain rendering at `spp` samples per pixel, and the
+/// predicted share of pixels plain rendering leaves more than 5% off.
+pub fn dtf_helps(threshold_over_sd: &[f64], spp: f64) -> (bool, f64) {
+    let off = predicted_off_share(threshold_over_sd, spp);
+    (off >= DTF_MIN_OFF, off)
 }
 
 /// (v, mu, its standard error) of a film of `spp` samples per pixel, on the mean of the
@@ -231,6 +297,30 @@ mod tests {
     }
 
     /// The choice is made from ray counts, not seconds: the same on every seed tried.
+    #[test]
+    fn low_noise_picks_plain_high_noise_picks_dtf() {
+        use crate::pipeline::auto::{dtf_helps, predicted_off_share, DTF_MIN_OFF};
+        // every pixel's sample deviation 1/10 of its threshold: at 64 spp the error's
+        // deviation is 1/80 of it, no pixel is off (erfc(80 / sqrt 2) ~ 0)
+        let low = vec![10.0; 100];
+        let (helps, off) = dtf_helps(&low, 64.0);
+        assert!(!helps && off < 1e-12, "{off}");
+        // deviation 10x the threshold: at 64 spp 1.25x, erfc(0.8 / sqrt 2) = 42% off
+        let high = vec![0.1; 100];
+        let (helps, off) = dtf_helps(&high, 64.0);
+        assert!(helps && (off - 0.4237).abs() < 1e-3, "{off}");
+        // the same pixels with enough samples: plain
+        assert!(!dtf_helps(&high, 1e6).0);
+        // a share: 3 noisy pixels in 100 (r = 0, always off) are above the 1% bar, none is not
+        let mut few = low.clone();
+        few[..3].fill(0.0);
+        assert!((predicted_off_share(&few, 64.0) - 0.03).abs() < 1e-12);
+        assert!(dtf_helps(&few, 64.0).0 && DTF_MIN_OFF <= 0.03);
+        // a pixel with no noise is never off; an empty pilot predicts nothing off
+        assert_eq!(predicted_off_share(&[f64::INFINITY], 1.0), 0.0);
+        assert_eq!(predicted_off_share(&[], 1.0), 0.0);
+    }
+
     #[test]
     fn the_choice_is_stable_over_seeds() {
         for seed in 1..4 {
