@@ -442,7 +442,9 @@ pub fn choose_method(
     }
     let (kind, why) = pipeline::auto::choose(&pilots);
     let chosen = pilots.iter().find(|p| p.kind == kind).expect("a candidate");
-    let pilot_seconds: f64 = pilots.iter().map(|p| p.seconds).sum();
+    let (threshold_over_sd, second_seconds) =
+        pipeline::auto::thresholds_over_sd(scene, set, chosen)?;
+    let pilot_seconds: f64 = pilots.iter().map(|p| p.seconds).sum::<f64>() + second_seconds;
     let spp = match (job.time, job.spp) {
         (Some(t), _) => (t - pilot_seconds).max(0.0) / chosen.seconds_per_spp.max(1e-12),
         (None, Some(n)) => n as f64,
@@ -453,7 +455,7 @@ pub fn choose_method(
     if kind != job.integrator_for(scene) {
         j.integrator = Some(kind);
     }
-    let (helps, off) = pipeline::auto::dtf_helps(&chosen.threshold_over_sd, spp);
+    let (helps, off) = pipeline::auto::dtf_helps(&threshold_over_sd, spp);
     let off = format!(
         "{:.1}% of the pixels predicted more than 5% off plain at about {spp:.0} spp",
         100.0 * off
