@@ -442,8 +442,7 @@ pub fn choose_method(
     }
     let (kind, why) = pipeline::auto::choose(&pilots);
     let chosen = pilots.iter().find(|p| p.kind == kind).expect("a candidate");
-    let (threshold_over_sd, second_seconds) =
-        pipeline::auto::thresholds_over_sd(scene, set, chosen)?;
+    let (noise, second_seconds) = pipeline::auto::thresholds_over_sd(scene, set, chosen)?;
     let pilot_seconds: f64 = pilots.iter().map(|p| p.seconds).sum::<f64>() + second_seconds;
     let spp = match (job.time, job.spp) {
         (Some(t), _) => (t - pilot_seconds).max(0.0) / chosen.seconds_per_spp.max(1e-12),
@@ -455,10 +454,11 @@ pub fn choose_method(
     if kind != job.integrator_for(scene) {
         j.integrator = Some(kind);
     }
-    let (helps, off) = pipeline::auto::dtf_helps(&threshold_over_sd, spp);
+    let (helps, off, rel_rmse) = pipeline::auto::dtf_helps(&noise, spp);
     let off = format!(
-        "{:.1}% of the pixels predicted more than 5% off plain at about {spp:.0} spp",
-        100.0 * off
+        "{:.1}% of the pixels predicted more than 5% off plain and its RMSE {:.1}% of the mean at about {spp:.0} spp",
+        100.0 * off,
+        100.0 * rel_rmse
     );
     let line = if spp < AUTO_DTF_MIN_SPP {
         format!(
@@ -467,9 +467,10 @@ pub fn choose_method(
         )
     } else if !helps {
         format!(
-            "plain {}; {why}; plain: {off}, dtf needs {}%",
+            "plain {}; {why}; plain: {off}, dtf needs {}% or {}%",
             name(&kind),
-            100.0 * pipeline::auto::DTF_MIN_OFF
+            100.0 * pipeline::auto::DTF_MIN_OFF,
+            100.0 * pipeline::auto::DTF_MIN_REL_RMSE
         )
     } else {
         j.method = Method::Dtf;

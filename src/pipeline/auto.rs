@@ -26,8 +26,11 @@
 //! `metrics::perceptual_error`), so that with n samples the pixel's error exceeds the
 //! threshold with probability erfc(r_p sqrt(n / 2)) (a normal error). Their mean is the
 //! share of pixels plain rendering is predicted to leave more than 5% off
-//! (`predicted_off_share`). Where it is below `DTF_MIN_OFF`, the noise left is lower than
-//! what the filter's bias costs: plain rendering wins (`dtf_helps`).
+//! (`predicted_off_share`); the same difference gives its relative RMSE at the budget.
+//! Where both are low (below `DTF_MIN_OFF` and `DTF_MIN_REL_RMSE`), the noise left costs
+//! less than the filter's bias: plain rendering wins (`dtf_helps`). The RMSE counts where
+//! few pixels carry most of the noise (a small bright emitter's fireflies), which the share
+//! of pixels off does not see and the filter removes.
 
 use super::render::{render, Budget, RenderSettings};
 use crate::film::Film;
@@ -49,6 +52,21 @@ pub const MISSING: f64 = 0.05;
 /// the prediction was 24-45% and lost where it was 4-8% (the prediction overstates what
 /// plain rendering leaves off, most on the room: its 0.2% at 60 s is predicted 4-8%).
 pub const DTF_MIN_OFF: f64 = 0.12;
+/// ... or, whatever that share, a predicted RMSE of plain rendering of at least this
+/// share of the image's mean (`dtf_helps`). Calibrated on the same points (DTF won at
+/// 2.9-7.4%, lost at 2.2-2.8% on the room at 60 s) and on rw-room at 128x128 (DTF 0.56x
+/// plain rendering's RMSE at 15 s, predicted 3.5%; 0.95x at 60 s, predicted 1.6%).
+pub const DTF_MIN_REL_RMSE: f64 = 0.03;
+
+/// What a second pilot predicts of plain rendering's error (`thresholds_over_sd`).
+#[derive(Clone, Debug)]
+pub struct Noise {
+    /// r_p of each pilot pixel: the perceptual error's threshold over one sample's
+    /// standard deviation (infinite where the two pilots agree).
+    pub threshold_over_sd: Vec<f64>,
+    /// The RMSE one sample per pixel gives, relative to the image's mean.
+    pub rel_sd: f64,
+}
 
 /// An estimator's seconds per ray against the path tracer's: BDPT evaluates every
 /// connection's BSDFs and MIS weights and splats, beyond its rays. Measured with `kalos
@@ -140,7 +158,7 @@ pub fn thresholds_over_sd(
     scene: &Scene,
     set: &RenderSettings,
     first: &Pilot,
-) -> Result<(Vec<f64>, f64), String> {
+) -> Result<(Noise, f64), String> {
     let t0 = std::time::Instant::now();
     let mut p = pilot_settings(set, first.kind);
     p.sampler.seed ^= 0x5ec0_4d00_0000_0001;
@@ -155,8 +173,9 @@ pub fn thresholds_over_sd(
 
 /// r_p of two independent images `a` and `b` (`width` pixels a row) of `spp` samples per
 /// pixel each: 5% x max(||mean||, floor) over sqrt(spp x E[||a - b||^2] / 2), the expectation
-/// the mean over the 3x3 neighbourhood; infinite where the images agree.
-pub fn threshold_over_error(a: &[[f64; 3]], b: &[[f64; 3]], width: usize, spp: u32) -> Vec<f64> {
+/// the mean over the 3x3 neighbourhood; infinite where the images agree. And the relative
+/// RMSE of one sample: sqrt(spp x mean_p ||a - b||^2 / 2) / mean_p ||mean||.
+pub fn threshold_over_error(a: &[[f64; 3]], b: &[[f64; 3]], width: usize, spp: u32) -> Noise {
     use crate::metrics::{PERCEPTUAL_FLOOR, PERCEPTUAL_THRESHOLD};
     let n = a.len().min(b.len());
     let width = width.max(1);
@@ -168,8 +187,11 @@ pub fn threshold_over_error(a: &[[f64; 3]], b: &[[f64; 3]], width: usize, spp: u
             .sum::<f64>()
             .powi(2)
     };
-    let floor = PERCEPTUAL_FLOOR * (0..n).map(norm).sum::<f64>() / n.max(1) as f64;
-    (0..width * height)
+    let mean = (0..n).map(norm).sum::<f64>() / n.max(1) as f64;
+    let mean_diff2 = (0..n).map(diff2).sum::<f64>() / n.max(1) as f64;
+    let rel_sd = (spp as f64 * mean_diff2 / 2.0).sqrt() / mean;
+    let floor = PERCEPTUAL_FLOOR * mean;
+    let threshold_over_sd = (0..width * height)
         .map(|i| {
             let (x, y) = (i % width, i / width);
             let (mut sum, mut count) = (0.0, 0.0);
@@ -187,7 +209,11 @@ pub fn threshold_over_error(a: &[[f64; 3]], b: &[[f64; 3]], width: usize, spp: u
                 f64::INFINITY
             }
         })
-        .collect()
+        .collect();
+    Noise {
+        threshold_over_sd,
+        rel_sd: if rel_sd.is_finite() { rel_sd } else { 0.0 },
+    }
 }
 
 /// The share of pixels plain rendering is predicted to leave more than the perceptual
@@ -204,11 +230,17 @@ pub fn predicted_off_share(threshold_over_sd: &[f64], spp: f64) -> f64 {
         / threshold_over_sd.len() as f64
 }
 
-/// Whether DTF is predicted to beat plain rendering at `spp` samples per pixel, and the
-/// predicted share of pixels plain rendering leaves more than 5% off.
-pub fn dtf_helps(threshold_over_sd: &[f64], spp: f64) -> (bool, f64) {
-    let off = predicted_off_share(threshold_over_sd, spp);
-    (off >= DTF_MIN_OFF, off)
+/// What the pilot predicts of plain rendering at `spp` samples per pixel: whether DTF
+/// beats it, the share of pixels it leaves more than 5% off, its RMSE relative to the
+/// image's mean.
+pub fn dtf_helps(noise: &Noise, spp: f64) -> (bool, f64, f64) {
+    let off = predicted_off_share(&noise.threshold_over_sd, spp);
+    let rel_rmse = noise.rel_sd / spp.max(1e-12).sqrt();
+    (
+        off >= DTF_MIN_OFF || rel_rmse >= DTF_MIN_REL_RMSE,
+        off,
+        rel_rmse,
+    )
 }
 
 /// (v, mu, its standard error) of a film of `spp` samples per pixel, on the mean of the
@@ -338,25 +370,33 @@ mod tests {
     /// The choice is made from ray counts, not seconds: the same on every seed tried.
     #[test]
     fn low_noise_picks_plain_high_noise_picks_dtf() {
-        use crate::pipeline::auto::{dtf_helps, predicted_off_share, DTF_MIN_OFF};
-        // every pixel's sample deviation 1/10 of its threshold: at 64 spp the error's
-        // deviation is 1/80 of it, no pixel is off (erfc(80 / sqrt 2) ~ 0)
-        let low = vec![10.0; 100];
-        let (helps, off) = dtf_helps(&low, 64.0);
-        assert!(!helps && off < 1e-12, "{off}");
+        use crate::pipeline::auto::{dtf_helps, predicted_off_share, Noise, DTF_MIN_OFF};
+        let noise = |r: f64, rel_sd: f64| Noise {
+            threshold_over_sd: vec![r; 100],
+            rel_sd,
+        };
+        // every pixel's sample deviation 1/10 of its threshold, the image's 1/10 of its
+        // mean: at 64 spp no pixel is off (erfc(80 / sqrt 2) ~ 0), relative RMSE 1.25%
+        let (helps, off, rel) = dtf_helps(&noise(10.0, 0.1), 64.0);
+        assert!(
+            !helps && off < 1e-12 && (rel - 0.0125).abs() < 1e-12,
+            "{off} {rel}"
+        );
         // deviation 10x the threshold: at 64 spp 1.25x, erfc(0.8 / sqrt 2) = 42% off
-        let high = vec![0.1; 100];
-        let (helps, off) = dtf_helps(&high, 64.0);
+        let high = noise(0.1, 1.0);
+        let (helps, off, _) = dtf_helps(&high, 64.0);
         assert!(helps && (off - 0.4237).abs() < 1e-3, "{off}");
         // the same pixels with enough samples: plain
         assert!(!dtf_helps(&high, 1e6).0);
         // a share: 20 noisy pixels in 100 (r = 0, always off) are above the bar, 5 are not
-        let mut some = low.clone();
-        some[..20].fill(0.0);
-        assert!((predicted_off_share(&some, 64.0) - 0.2).abs() < 1e-12);
+        let mut some = noise(10.0, 0.1);
+        some.threshold_over_sd[..20].fill(0.0);
+        assert!((predicted_off_share(&some.threshold_over_sd, 64.0) - 0.2).abs() < 1e-12);
         assert!(dtf_helps(&some, 64.0).0 && DTF_MIN_OFF <= 0.2);
-        some[5..].fill(10.0);
+        some.threshold_over_sd[5..].fill(10.0);
         assert!(!dtf_helps(&some, 64.0).0 && DTF_MIN_OFF > 0.05);
+        // few pixels off but a large RMSE (fireflies): dtf
+        assert!(dtf_helps(&noise(10.0, 0.5), 64.0).0);
         // a pixel with no noise is never off; an empty pilot predicts nothing off
         assert_eq!(predicted_off_share(&[f64::INFINITY], 1.0), 0.0);
         assert_eq!(predicted_off_share(&[], 1.0), 0.0);
@@ -369,19 +409,21 @@ mod tests {
         use crate::pipeline::auto::threshold_over_error;
         let a = vec![[1.03; 3]; 12];
         let b = vec![[0.97; 3]; 12];
-        let r = threshold_over_error(&a, &b, 4, 2);
+        let noise = threshold_over_error(&a, &b, 4, 2);
+        // sqrt(2 x 0.0324 / 2) / 3
+        assert!((noise.rel_sd - 0.06).abs() < 1e-12, "{}", noise.rel_sd);
+        let r = noise.threshold_over_sd;
         assert_eq!(r.len(), 12);
         for v in &r {
             assert!((v - 0.15 / 0.18).abs() < 1e-9, "{v}");
         }
         // the same images: no error, never off
-        assert!(threshold_over_error(&a, &a, 4, 2)
-            .iter()
-            .all(|v| v.is_infinite()));
+        let same = threshold_over_error(&a, &a, 4, 2);
+        assert!(same.threshold_over_sd.iter().all(|v| v.is_infinite()) && same.rel_sd == 0.0);
         // one differing pixel is spread over its 3x3 neighbourhood (a corner: 4 pixels)
         let mut c = a.clone();
         c[0] = [0.97; 3];
-        let r = threshold_over_error(&a, &c, 4, 2);
+        let r = threshold_over_error(&a, &c, 4, 2).threshold_over_sd;
         assert!(
             (r[0] - 0.15 / (0.18f64.powi(2) / 4.0).sqrt()).abs() < 1e-9,
             "{}",
