@@ -49,13 +49,13 @@ pub const MISSING: f64 = 0.05;
 /// DTF is chosen only where plain rendering is predicted to leave at least this share of
 /// the pixels more than 5% off at the budget (`dtf_helps`). Calibrated on the Cornell box
 /// and the furnished room at 256x256, 10 s and 60 s (docs/results/auto.md): DTF won where
-/// the prediction was 24-45% and lost where it was 4-8% (the prediction overstates what
-/// plain rendering leaves off, most on the room: its 0.2% at 60 s is predicted 4-8%).
+/// the prediction was 16-44% and lost where it was 1.7-3.6% (the prediction overstates
+/// what plain rendering leaves off, most on the room: its 0.2% at 60 s).
 pub const DTF_MIN_OFF: f64 = 0.12;
 /// ... or, whatever that share, a predicted RMSE of plain rendering of at least this
-/// share of the image's mean (`dtf_helps`). Calibrated on the same points (DTF won at
-/// 2.9-7.4%, lost at 2.2-2.8% on the room at 60 s) and on rw-room at 128x128 (DTF 0.56x
-/// plain rendering's RMSE at 15 s, predicted 3.5%; 0.95x at 60 s, predicted 1.6%).
+/// share of the image's mean (`dtf_helps`). Calibrated on rw-room at 128x128 (DTF 0.56x
+/// plain rendering's RMSE at 15 s, predicted 3.3% with 8% of the pixels off; 0.86x at 60 s,
+/// predicted 1.5%) and the room at 60 s (plain rendering wins, predicted 1.8-2.5%).
 pub const DTF_MIN_REL_RMSE: f64 = 0.03;
 
 /// What a second pilot predicts of plain rendering's error (`thresholds_over_sd`).
