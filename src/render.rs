@@ -335,7 +335,9 @@ pub const AUTO_KEEP_CONVERGED: f32 = 0.02;
 /// the line that says what was chosen and why; a job that names its method is returned as
 /// it is, with no line. The estimator comes from the pilot (`pipeline::auto`) unless the
 /// job or the scene file names one; DTF is chosen over it where the budget allows
-/// `AUTO_DTF_MIN_SPP` samples per pixel, plain rendering elsewhere.
+/// `AUTO_DTF_MIN_SPP` samples per pixel and the pilot predicts that plain rendering would
+/// leave enough pixels perceptibly off (`pipeline::auto::dtf_helps`), plain rendering
+/// elsewhere.
 pub fn choose_method(
     scene: &Scene,
     job: &RenderJob,
@@ -377,7 +379,8 @@ pub fn choose_method(
     }
     let (kind, why) = pipeline::auto::choose(&pilots);
     let chosen = pilots.iter().find(|p| p.kind == kind).expect("a candidate");
-    let pilot_seconds: f64 = pilots.iter().map(|p| p.seconds).sum();
+    let (noise, second_seconds) = pipeline::auto::thresholds_over_sd(scene, set, chosen)?;
+    let pilot_seconds: f64 = pilots.iter().map(|p| p.seconds).sum::<f64>() + second_seconds;
     let spp = match (job.time, job.spp) {
         (Some(t), _) => (t - pilot_seconds).max(0.0) / chosen.seconds_per_spp.max(1e-12),
         (None, Some(n)) => n as f64,
@@ -388,17 +391,29 @@ pub fn choose_method(
     if kind != job.integrator_for(scene) {
         j.integrator = Some(kind);
     }
-    let method = if spp >= AUTO_DTF_MIN_SPP {
-        j.method = Method::Dtf;
-        j.dtf.keep_converged = j.dtf.keep_converged.or(Some(AUTO_KEEP_CONVERGED));
-        format!("dtf over {}", name(&kind))
-    } else {
+    let (helps, off, rel_rmse) = pipeline::auto::dtf_helps(&noise, spp);
+    let off = format!(
+        "{:.1}% of the pixels predicted more than 5% off plain and its RMSE {:.1}% of the mean at about {spp:.0} spp",
+        100.0 * off,
+        100.0 * rel_rmse
+    );
+    let line = if spp < AUTO_DTF_MIN_SPP {
         format!(
-            "plain {} (about {spp:.0} spp fit the budget; dtf needs {AUTO_DTF_MIN_SPP})",
+            "plain {} (about {spp:.0} spp fit the budget; dtf needs {AUTO_DTF_MIN_SPP}); {why}",
             name(&kind)
         )
+    } else if !helps {
+        format!(
+            "plain {}; {why}; plain: {off}, dtf needs {}% or {}%",
+            name(&kind),
+            100.0 * pipeline::auto::DTF_MIN_OFF,
+            100.0 * pipeline::auto::DTF_MIN_REL_RMSE
+        )
+    } else {
+        j.method = Method::Dtf;
+        j.dtf.keep_converged = j.dtf.keep_converged.or(Some(AUTO_KEEP_CONVERGED));
+        format!("dtf over {}; {why}; dtf: {off}", name(&kind))
     };
-    let line = format!("{method}; {why}");
     progress.message(&format!("method: {line}"));
     Ok((j, Some(line)))
 }
