@@ -62,10 +62,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     ("test_mesh_attributes_3_face_direct", "mesh_attribute texture (face colours) not read"),
     ("test_mesh_attributes_3_vertex_direct", "mesh_attribute texture (vertex colours) not read"),
     (
-        "test_orthographic_path",
-        "checkerboard texture rendered as the mean of its colours (the orthographic extent agrees)",
-    ),
-    (
         "test_various_emitters_ptracer",
         "about 1% of pixel-channels off with the projector read (the particle tracer is rendered by the path tracer); not yet measured",
     ),

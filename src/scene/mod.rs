@@ -39,6 +39,9 @@ pub struct MaterialDesc {
     pub map_kd: Option<PathBuf>,
     /// How `map_kd` is looked up (Mitsuba's bitmap `filter_type`, `wrap_mode`, `to_uv`).
     pub kd_sampling: texture::Sampling,
+    /// A diffuse-reflectance texture the scene reader made (Mitsuba's `checkerboard`),
+    /// used instead of `map_kd`.
+    pub kd_procedural: Option<Arc<Texture>>,
     /// The share of light the surface stops (Mitsuba's `mask`, MTL's `d`); the rest
     /// passes straight through, as if the surface were not there (a cut-out).
     pub opacity: f32,
@@ -177,6 +180,7 @@ impl MaterialDesc {
             illum: 2,
             map_kd: None,
             kd_sampling: texture::Sampling::default(),
+            kd_procedural: None,
             opacity: 1.0,
             map_opacity: None,
             emit_one_minus_albedo: false,
@@ -319,14 +323,20 @@ impl Scene {
         let mut materials = Vec::with_capacity(desc.materials.len());
         let mut material_warnings: Vec<String> = Vec::new();
         for m in &desc.materials {
-            let kd_texture = match &m.map_kd {
-                Some(p) => Some(texture_index(
+            let kd_texture = match (&m.kd_procedural, &m.map_kd) {
+                (Some(t), _) => {
+                    textures.push(Texture::clone(t));
+                    // never matches a file's key: not shared
+                    tex_paths.push((PathBuf::new(), t.sampling, None));
+                    Some(textures.len() as u32 - 1)
+                }
+                (None, Some(p)) => Some(texture_index(
                     (p.clone(), m.kd_sampling, None),
                     m,
                     &mut textures,
                     &mut tex_paths,
                 )?),
-                None => None,
+                (None, None) => None,
             };
             let opacity_texture = match &m.map_opacity {
                 Some((p, s, from)) => Some(texture_index(

@@ -1,6 +1,8 @@
 //! Image textures (map_Kd, opacity): PNG/JPEG/TGA/BMP decoded from sRGB to linear,
 //! EXR/PFM as stored (linear), OBJ's v axis pointing up; looked up as Mitsuba's `bitmap`
 //! does ([`Sampling`]: bilinear or nearest, repeat, mirror or clamp, a `to_uv` transform).
+//! Mitsuba's `checkerboard` is the 2 x 2 texture of its two colours, looked up nearest and
+//! repeated ([`Texture::checkerboard`]).
 
 use std::path::Path;
 
@@ -45,7 +47,7 @@ pub enum OpacityFrom {
     AlphaOrGrey,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     pub width: u32,
     pub height: u32,
@@ -92,6 +94,21 @@ impl Texture {
             texels,
             sampling: Sampling::default(),
         })
+    }
+
+    /// Mitsuba's `checkerboard`: `color0` where the fractional parts of (u, v) (after
+    /// `to_uv`, in Mitsuba's uv) are both above 1/2 or both below, `color1` elsewhere.
+    pub fn checkerboard(color0: [f32; 3], color1: [f32; 3], to_uv: [f32; 6]) -> Texture {
+        Texture {
+            width: 2,
+            height: 2,
+            texels: vec![color0, color1, color1, color0],
+            sampling: Sampling {
+                nearest: true,
+                wrap: Wrap::Repeat,
+                to_uv,
+            },
+        }
     }
 
     /// A scalar map (every texel's three values equal) for opacity.
@@ -252,5 +269,27 @@ mod tests {
         t.sampling.to_uv = [2.0, 0.0, -0.5, 0.0, 1.0, 0.0];
         assert_eq!(t.lookup(0.2, 0.5)[0], 1.0);
         assert_eq!(t.lookup(0.3, 0.5)[0], 0.0);
+    }
+
+    /// The checkerboard as Mitsuba 3.9.1 evaluates it (color0 red, color1 green, read
+    /// from `mi.load_dict({'type': 'checkerboard', ...}).eval(si)`): red at Mitsuba's uv
+    /// (0.25, 0.25) and (0.75, 0.75), green at (0.75, 0.25) and (0.25, 0.75); `to_uv`
+    /// scales the squares. kalos' v points up: Mitsuba's (u, v) is kalos' (u, 1 - v).
+    #[test]
+    fn checkerboard_follows_mitsuba() {
+        let (r, g) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let t = Texture::checkerboard(r, g, Sampling::default().to_uv);
+        let at = |t: &Texture, u: f32, v_mitsuba: f32| t.lookup(u, 1.0 - v_mitsuba);
+        assert_eq!(at(&t, 0.25, 0.25), r);
+        assert_eq!(at(&t, 0.75, 0.75), r);
+        assert_eq!(at(&t, 0.75, 0.25), g);
+        assert_eq!(at(&t, 0.25, 0.75), g);
+        assert_eq!(at(&t, 1.25, -0.75), r, "repeats");
+        assert_eq!(t.mean(), [0.5, 0.5, 0.0]);
+        // to_uv scaled by 5: squares of 1/10
+        let t = Texture::checkerboard(r, g, [5.0, 0.0, 0.0, 0.0, 5.0, 0.0]);
+        assert_eq!(at(&t, 0.05, 0.05), r);
+        assert_eq!(at(&t, 0.15, 0.05), g);
+        assert_eq!(at(&t, 0.15, 0.15), r);
     }
 }

@@ -104,6 +104,10 @@ impl<'a> Loader<'a> {
                 m.map_kd = Some(p);
                 m.kd_sampling = sampling;
             }
+            Some(Color::Procedural(t)) => {
+                m.kd = [1.0; 3];
+                m.kd_procedural = Some(std::sync::Arc::new(t));
+            }
         }
     }
 
@@ -312,6 +316,14 @@ impl<'a> Loader<'a> {
                             Some(Color::Rgb(v)) => inner_m.opacity *= (v[0] + v[1] + v[2]) / 3.0,
                             Some(Color::Bitmap(p, sampling)) => {
                                 inner_m.map_opacity = Some((p, sampling, OpacityFrom::Luminance));
+                            }
+                            Some(c @ Color::Procedural(_)) => {
+                                self.warn(
+                                    "mask procedural",
+                                    format!("{}: a checkerboard as mask opacity is not supported: rendered with its mean", el.at),
+                                );
+                                let v = self.mean_rgb(c, &el.at)?;
+                                inner_m.opacity *= (v[0] + v[1] + v[2]) / 3.0;
                             }
                         }
                     }

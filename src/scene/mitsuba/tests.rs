@@ -750,3 +750,38 @@ fn an_empty_scene_names_what_was_left_out() {
         "{e}"
     );
 }
+
+/// A `checkerboard` reflectance is a texture of its two colours (not their mean, which
+/// was rendered before), with its `to_uv`; a colour that is no number is one line.
+#[test]
+fn checkerboard_reflectance_is_a_texture() {
+    let d = scene(
+        r#"<shape type="rectangle"><bsdf type="diffuse">
+           <texture name="reflectance" type="checkerboard">
+             <rgb name="color0" value="1 0 0"/><float name="color1" value="0.25"/>
+             <transform name="to_uv"><scale x="5" y="5"/></transform>
+           </texture></bsdf></shape>"#,
+    )
+    .unwrap();
+    assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+    let t = d.materials[0].kd_procedural.as_deref().expect("a texture");
+    assert_eq!(t.lookup(0.05, 0.95), [1.0, 0.0, 0.0]);
+    assert_eq!(t.lookup(0.15, 0.95), [0.25; 3]);
+    assert_eq!(t.sampling.to_uv, [5.0, 0.0, 0.0, 0.0, 5.0, 0.0]);
+    let s = crate::scene::Scene::build(d, 0.0).unwrap();
+    assert_eq!(s.materials[0].kd_texture, Some(0));
+    // Mitsuba's defaults: 0.4 and 0.2
+    let d = scene(r#"<shape type="rectangle"><bsdf type="diffuse"><texture name="reflectance" type="checkerboard"/></bsdf></shape>"#).unwrap();
+    let t = d.materials[0].kd_procedural.as_deref().unwrap();
+    assert_eq!(t.texels, vec![[0.4; 3], [0.2; 3], [0.2; 3], [0.4; 3]]);
+    let e = scene(
+        r#"<shape type="rectangle"><bsdf type="diffuse">
+           <texture name="reflectance" type="checkerboard"><float name="color0" value="red"/>
+           </texture></bsdf></shape>"#,
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("t.xml:3") && e.contains("color0") && !e.contains('\n'),
+        "{e}"
+    );
+}
