@@ -10,6 +10,7 @@ pub mod mtl;
 pub mod obj;
 pub mod ply;
 pub mod texture;
+pub mod texture_normal;
 pub mod toml_scene;
 pub mod tri_attr;
 
@@ -42,6 +43,8 @@ pub struct MaterialDesc {
     /// A diffuse-reflectance texture the scene reader made (Mitsuba's `checkerboard`),
     /// used instead of `map_kd`.
     pub kd_procedural: Option<Arc<Texture>>,
+    /// A shading normal from a texture (Mitsuba's `normalmap` and `bumpmap`).
+    pub normal_map: Option<texture_normal::NormalMap>,
     /// The share of light the surface stops (Mitsuba's `mask`, MTL's `d`); the rest
     /// passes straight through, as if the surface were not there (a cut-out).
     pub opacity: f32,
@@ -181,6 +184,7 @@ impl MaterialDesc {
             map_kd: None,
             kd_sampling: texture::Sampling::default(),
             kd_procedural: None,
+            normal_map: None,
             opacity: 1.0,
             map_opacity: None,
             emit_one_minus_albedo: false,
@@ -313,6 +317,8 @@ pub struct Scene {
     pub content_hash: u64,
     /// Some material lets light through where it is not opaque (see `hit.rs`).
     pub cutouts: bool,
+    /// Some material takes its shading normal from a texture (see `texture_normal`).
+    pub normal_maps: bool,
 }
 
 impl Scene {
@@ -386,9 +392,11 @@ impl Scene {
                 one_sided: m.one_sided && bsdf.is_two_sided(),
                 opacity: m.opacity.min(1.0),
                 opacity_texture,
+                normal_map: m.normal_map.clone(),
             });
         }
         let cutouts = materials.iter().any(Material::is_cutout);
+        let normal_maps = materials.iter().any(|m| m.normal_map.is_some());
         let t0 = Instant::now();
         let bvh = Bvh::build(&desc.positions);
         let bvh_seconds = t0.elapsed().as_secs_f64();
@@ -531,6 +539,7 @@ impl Scene {
             camera_warning,
             content_hash: 0,
             cutouts,
+            normal_maps,
         })
     }
 

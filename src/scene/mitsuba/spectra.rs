@@ -459,28 +459,7 @@ impl<'a> Loader<'a> {
                 }
                 match kind {
                     "bitmap" => {
-                        let f = self.string(p, "filename")?.ok_or_else(|| {
-                            format!("{}: bitmap texture without a filename", p.at)
-                        })?;
-                        let path = self.path(&f);
-                        crate::input::check_regular_file(&path, crate::input::max_input_bytes()?)
-                            .map_err(|e| format!("{}: bitmap texture: {e}", p.at))?;
-                        let sampling = self.bitmap_sampling(p)?;
-                        for k in ["raw", "format"] {
-                            if let Some(c) = self.prop(p, k) {
-                                let v = c.attr("value").unwrap_or("");
-                                if !matches!((k, v), ("raw", "false")) {
-                                    self.warn(
-                                        &format!("bitmap {k}"),
-                                        format!(
-                                            "{}: bitmap {k} '{v}' is not supported: sRGB-decoded 8-bit or linear EXR",
-                                            c.at
-                                        ),
-                                    );
-                                }
-                            }
-                        }
-                        self.unused(p, "texture 'bitmap'");
+                        let (path, sampling, _) = self.bitmap(p, false)?;
                         Ok(Color::Bitmap(path, sampling))
                     }
                     "checkerboard" => {
@@ -526,6 +505,48 @@ impl<'a> Loader<'a> {
                 p.at
             )),
         }
+    }
+
+    /// A `bitmap` texture element: its file (checked to be one), its lookup, and its
+    /// `raw` flag (8-bit values not sRGB-decoded), which is warned unless `raw_read` (the
+    /// caller reads it).
+    pub(super) fn bitmap(
+        &self,
+        p: &'a El,
+        raw_read: bool,
+    ) -> R<(PathBuf, crate::scene::texture::Sampling, bool)> {
+        let f = self
+            .string(p, "filename")?
+            .ok_or_else(|| format!("{}: bitmap texture without a filename", p.at))?;
+        let path = self.path(&f);
+        crate::input::check_regular_file(&path, crate::input::max_input_bytes()?)
+            .map_err(|e| format!("{}: bitmap texture: {e}", p.at))?;
+        let sampling = self.bitmap_sampling(p)?;
+        let raw = self.boolean(p, "raw")?.unwrap_or(false);
+        if raw && !raw_read {
+            self.warn(
+                "bitmap raw",
+                format!(
+                    "{}: bitmap raw 'true' is not supported here: sRGB-decoded 8-bit or linear EXR",
+                    p.at
+                ),
+            );
+        }
+        // Mitsuba's `format` sets the precision it keeps the texels in
+        if let Some(c) = self.prop(p, "format") {
+            let v = c.attr("value").unwrap_or("");
+            if v != "variant" {
+                self.warn(
+                    "bitmap format",
+                    format!(
+                        "{}: bitmap format '{v}' is not supported: sRGB-decoded 8-bit or linear EXR",
+                        c.at
+                    ),
+                );
+            }
+        }
+        self.unused(p, "texture 'bitmap'");
+        Ok((path, sampling, raw))
     }
 
     /// A bitmap's `filter_type`, `wrap_mode` and `to_uv`.
