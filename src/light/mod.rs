@@ -524,6 +524,7 @@ mod tests {
             one_sided: false,
             opacity: 1.0,
             opacity_texture: None,
+            normal_map: None,
         }
     }
 

@@ -21,6 +21,8 @@ pub struct Material {
     /// the rest passes through it unchanged (a cut-out).
     pub opacity: f32,
     pub opacity_texture: Option<u32>,
+    /// The shading normal from a texture (Mitsuba's `normalmap`, `bumpmap`).
+    pub normal_map: Option<crate::scene::texture_normal::NormalMap>,
 }
 
 impl Material {

@@ -170,6 +170,22 @@ impl Scene {
         prefetch_line(self.tri_material.as_ptr().wrapping_add(i));
     }
 
+    /// The shading normal of triangle `prim` at `uv` from its material's normal or bump
+    /// map (`ns` if it has none). (Out of line: scenes without such maps never call it.)
+    #[inline(never)]
+    fn mapped_normal(&self, prim: u32, uv: Vec2, ng: Vec3, ns: Vec3) -> Vec3 {
+        let Some(map) = &self.material_of(prim).normal_map else {
+            return ns;
+        };
+        let i = prim as usize;
+        let tangents = self
+            .uvs
+            .get(i)
+            .and_then(|uvs| super::texture_normal::tangents(&self.tris[i], uvs));
+        let (dp_du, dp_dv) = tangents.unwrap_or_else(|| ng.any_orthonormal_pair());
+        map.perturb(uv, ng, ns, dp_du, dp_dv)
+    }
+
     /// The surface information of a BVH hit.
     #[inline(always)]
     pub fn surface_hit(&self, h: Hit) -> SurfaceHit {
@@ -194,6 +210,11 @@ impl Scene {
         let uv = match self.uvs.get(i) {
             Some(uv) => uv[0] * b0 + uv[1] * h.b1 + uv[2] * h.b2,
             None => Vec2::new(h.b1, h.b2),
+        };
+        let ns = if self.normal_maps {
+            self.mapped_normal(h.prim, uv, ng, ns)
+        } else {
+            ns
         };
         SurfaceHit {
             p,

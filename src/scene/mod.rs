@@ -10,6 +10,7 @@ pub mod mtl;
 pub mod obj;
 pub mod ply;
 pub mod texture;
+pub mod texture_normal;
 pub mod toml_scene;
 pub mod tri_attr;
 
@@ -39,6 +40,11 @@ pub struct MaterialDesc {
     pub map_kd: Option<PathBuf>,
     /// How `map_kd` is looked up (Mitsuba's bitmap `filter_type`, `wrap_mode`, `to_uv`).
     pub kd_sampling: texture::Sampling,
+    /// A diffuse-reflectance texture the scene reader made (Mitsuba's `checkerboard`),
+    /// used instead of `map_kd`.
+    pub kd_procedural: Option<Arc<Texture>>,
+    /// A shading normal from a texture (Mitsuba's `normalmap` and `bumpmap`).
+    pub normal_map: Option<texture_normal::NormalMap>,
     /// The share of light the surface stops (Mitsuba's `mask`, MTL's `d`); the rest
     /// passes straight through, as if the surface were not there (a cut-out).
     pub opacity: f32,
@@ -177,6 +183,8 @@ impl MaterialDesc {
             illum: 2,
             map_kd: None,
             kd_sampling: texture::Sampling::default(),
+            kd_procedural: None,
+            normal_map: None,
             opacity: 1.0,
             map_opacity: None,
             emit_one_minus_albedo: false,
@@ -309,6 +317,8 @@ pub struct Scene {
     pub content_hash: u64,
     /// Some material lets light through where it is not opaque (see `hit.rs`).
     pub cutouts: bool,
+    /// Some material takes its shading normal from a texture (see `texture_normal`).
+    pub normal_maps: bool,
 }
 
 impl Scene {
@@ -319,14 +329,20 @@ impl Scene {
         let mut materials = Vec::with_capacity(desc.materials.len());
         let mut material_warnings: Vec<String> = Vec::new();
         for m in &desc.materials {
-            let kd_texture = match &m.map_kd {
-                Some(p) => Some(texture_index(
+            let kd_texture = match (&m.kd_procedural, &m.map_kd) {
+                (Some(t), _) => {
+                    textures.push(Texture::clone(t));
+                    // never matches a file's key: not shared
+                    tex_paths.push((PathBuf::new(), t.sampling, None));
+                    Some(textures.len() as u32 - 1)
+                }
+                (None, Some(p)) => Some(texture_index(
                     (p.clone(), m.kd_sampling, None),
                     m,
                     &mut textures,
                     &mut tex_paths,
                 )?),
-                None => None,
+                (None, None) => None,
             };
             let opacity_texture = match &m.map_opacity {
                 Some((p, s, from)) => Some(texture_index(
@@ -376,9 +392,11 @@ impl Scene {
                 one_sided: m.one_sided && bsdf.is_two_sided(),
                 opacity: m.opacity.min(1.0),
                 opacity_texture,
+                normal_map: m.normal_map.clone(),
             });
         }
         let cutouts = materials.iter().any(Material::is_cutout);
+        let normal_maps = materials.iter().any(|m| m.normal_map.is_some());
         let t0 = Instant::now();
         let bvh = Bvh::build(&desc.positions);
         let bvh_seconds = t0.elapsed().as_secs_f64();
@@ -521,6 +539,7 @@ impl Scene {
             camera_warning,
             content_hash: 0,
             cutouts,
+            normal_maps,
         })
     }
 

@@ -1,6 +1,8 @@
 //! Image textures (map_Kd, opacity): PNG/JPEG/TGA/BMP decoded from sRGB to linear,
 //! EXR/PFM as stored (linear), OBJ's v axis pointing up; looked up as Mitsuba's `bitmap`
 //! does ([`Sampling`]: bilinear or nearest, repeat, mirror or clamp, a `to_uv` transform).
+//! Mitsuba's `checkerboard` is the 2 x 2 texture of its two colours, looked up nearest and
+//! repeated ([`Texture::checkerboard`]).
 
 use std::path::Path;
 
@@ -45,7 +47,7 @@ pub enum OpacityFrom {
     AlphaOrGrey,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     pub width: u32,
     pub height: u32,
@@ -55,6 +57,12 @@ pub struct Texture {
 
 impl Texture {
     pub fn load(path: &Path) -> Result<Texture, String> {
+        Texture::load_as(path, false)
+    }
+
+    /// [`Texture::load`]; `raw`: 8-bit values as they are, v / 255, not sRGB-decoded
+    /// (Mitsuba's bitmap `raw`, for normal and bump maps).
+    pub fn load_as(path: &Path, raw: bool) -> Result<Texture, String> {
         // linear HDR images (Mitsuba scenes' bitmaps): EXR and PFM through image_io
         let ext = path
             .extension()
@@ -80,7 +88,13 @@ impl Texture {
             return Err(format!("{}: texture is empty", path.display()));
         }
         let lut: Vec<f32> = (0..256)
-            .map(|i| crate::image_io::srgb_decode(i as f32 / 255.0))
+            .map(|i| {
+                if raw {
+                    i as f32 / 255.0
+                } else {
+                    crate::image_io::srgb_decode(i as f32 / 255.0)
+                }
+            })
             .collect();
         let texels = img
             .pixels()
@@ -92,6 +106,21 @@ impl Texture {
             texels,
             sampling: Sampling::default(),
         })
+    }
+
+    /// Mitsuba's `checkerboard`: `color0` where the fractional parts of (u, v) (after
+    /// `to_uv`, in Mitsuba's uv) are both above 1/2 or both below, `color1` elsewhere.
+    pub fn checkerboard(color0: [f32; 3], color1: [f32; 3], to_uv: [f32; 6]) -> Texture {
+        Texture {
+            width: 2,
+            height: 2,
+            texels: vec![color0, color1, color1, color0],
+            sampling: Sampling {
+                nearest: true,
+                wrap: Wrap::Repeat,
+                to_uv,
+            },
+        }
     }
 
     /// A scalar map (every texel's three values equal) for opacity.
@@ -143,6 +172,32 @@ impl Texture {
             }) as usize
         };
         self.texels[wrap(y, self.height) * self.width as usize + wrap(x, self.width)]
+    }
+
+    /// (df/du, df/dv) of the first channel f at (u, v) (v = 0 at the bottom of the
+    /// image), the derivatives taken in Mitsuba's uv (v down the image), as Mitsuba's
+    /// bitmap `eval_1_grad`: the derivative of the bilinear blend, through `to_uv`'s
+    /// linear part; 0 for a nearest lookup (constant between texels).
+    pub fn gradient(&self, u: f32, v: f32) -> [f32; 2] {
+        if self.sampling.nearest || !(u.is_finite() && v.is_finite()) {
+            return [0.0; 2];
+        }
+        let [a, b, c, d, e, f] = self.sampling.to_uv;
+        let w = 1.0 - v;
+        let (wf, hf) = (self.width as f32, self.height as f32);
+        let x = (a * u + b * w + c) * wf - 0.5;
+        let y = (d * u + e * w + f) * hf - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let f00 = self.texel(x0, y0)[0];
+        let f10 = self.texel(x0 + 1, y0)[0];
+        let f01 = self.texel(x0, y0 + 1)[0];
+        let f11 = self.texel(x0 + 1, y0 + 1)[0];
+        // per texel along x and y, then per unit of the transformed uv
+        let df_dx = ((f10 - f00) * (1.0 - fy) + (f11 - f01) * fy) * wf;
+        let df_dy = ((f01 - f00) * (1.0 - fx) + (f11 - f10) * fx) * hf;
+        [a * df_dx + d * df_dy, b * df_dx + e * df_dy]
     }
 
     /// Mean texel (linear RGB).
@@ -252,5 +307,61 @@ mod tests {
         t.sampling.to_uv = [2.0, 0.0, -0.5, 0.0, 1.0, 0.0];
         assert_eq!(t.lookup(0.2, 0.5)[0], 1.0);
         assert_eq!(t.lookup(0.3, 0.5)[0], 0.0);
+    }
+
+    /// The gradient of a bilinear lookup is the derivative of the blend: on a ramp
+    /// f = x (texel index) it is the width along u; v runs down the image in Mitsuba's
+    /// uv, so a ramp down the rows has df/dv = +height; to_uv's scale multiplies it.
+    #[test]
+    fn gradient_is_the_bilinear_derivative() {
+        let ramp = |w: u32, h: u32, f: &dyn Fn(u32, u32) -> f32| Texture {
+            width: w,
+            height: h,
+            texels: (0..w * h).map(|i| [f(i % w, i / w); 3]).collect(),
+            sampling: Sampling::default(),
+        };
+        let t = ramp(8, 4, &|x, _| x as f32);
+        let g = t.gradient(0.4, 0.3);
+        assert!((g[0] - 8.0).abs() < 1e-4 && g[1].abs() < 1e-6, "{g:?}");
+        let t = ramp(8, 4, &|_, y| 0.5 * y as f32);
+        let g = t.gradient(0.4, 0.3);
+        assert!(g[0].abs() < 1e-6 && (g[1] - 2.0).abs() < 1e-4, "{g:?}");
+        let mut t = ramp(8, 4, &|x, _| x as f32);
+        t.sampling.to_uv = [0.5, 0.0, 0.0, 0.0, 1.0, 0.0];
+        let g = t.gradient(0.4, 0.3);
+        assert!((g[0] - 4.0).abs() < 1e-4, "{g:?}");
+        // a finite difference of the lookup agrees (inside a texel cell)
+        let t = ramp(8, 4, &|x, y| (x * x + 3 * y) as f32 * 0.1);
+        let (u, v, h) = (0.41, 0.37, 1e-3);
+        let du = (t.lookup(u + h, v)[0] - t.lookup(u - h, v)[0]) / (2.0 * h);
+        // kalos' v is up: d/dv_mitsuba = -d/dv_kalos
+        let dv = -(t.lookup(u, v + h)[0] - t.lookup(u, v - h)[0]) / (2.0 * h);
+        let g = t.gradient(u, v);
+        assert!(
+            (g[0] - du).abs() < 1e-2 && (g[1] - dv).abs() < 1e-2,
+            "{g:?} vs {du} {dv}"
+        );
+    }
+
+    /// The checkerboard as Mitsuba 3.9.1 evaluates it (color0 red, color1 green, read
+    /// from `mi.load_dict({'type': 'checkerboard', ...}).eval(si)`): red at Mitsuba's uv
+    /// (0.25, 0.25) and (0.75, 0.75), green at (0.75, 0.25) and (0.25, 0.75); `to_uv`
+    /// scales the squares. kalos' v points up: Mitsuba's (u, v) is kalos' (u, 1 - v).
+    #[test]
+    fn checkerboard_follows_mitsuba() {
+        let (r, g) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let t = Texture::checkerboard(r, g, Sampling::default().to_uv);
+        let at = |t: &Texture, u: f32, v_mitsuba: f32| t.lookup(u, 1.0 - v_mitsuba);
+        assert_eq!(at(&t, 0.25, 0.25), r);
+        assert_eq!(at(&t, 0.75, 0.75), r);
+        assert_eq!(at(&t, 0.75, 0.25), g);
+        assert_eq!(at(&t, 0.25, 0.75), g);
+        assert_eq!(at(&t, 1.25, -0.75), r, "repeats");
+        assert_eq!(t.mean(), [0.5, 0.5, 0.0]);
+        // to_uv scaled by 5: squares of 1/10
+        let t = Texture::checkerboard(r, g, [5.0, 0.0, 0.0, 0.0, 5.0, 0.0]);
+        assert_eq!(at(&t, 0.05, 0.05), r);
+        assert_eq!(at(&t, 0.15, 0.05), g);
+        assert_eq!(at(&t, 0.15, 0.15), r);
     }
 }

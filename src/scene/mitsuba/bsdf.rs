@@ -3,7 +3,8 @@
 use super::*;
 use crate::material::conductor::fresnel_conductor;
 use crate::material::dielectric::{fresnel_dielectric, Tint};
-use crate::scene::texture::OpacityFrom;
+use crate::scene::texture::{OpacityFrom, Texture};
+use crate::scene::texture_normal::NormalMap;
 
 /// A normalized-Phong exponent with about the spread of a GGX lobe of roughness alpha.
 pub(super) fn phong_exponent(alpha: f32) -> f32 {
@@ -103,6 +104,10 @@ impl<'a> Loader<'a> {
                 m.kd = [1.0; 3];
                 m.map_kd = Some(p);
                 m.kd_sampling = sampling;
+            }
+            Some(Color::Procedural(t)) => {
+                m.kd = [1.0; 3];
+                m.kd_procedural = Some(std::sync::Arc::new(t));
             }
         }
     }
@@ -313,14 +318,18 @@ impl<'a> Loader<'a> {
                             Some(Color::Bitmap(p, sampling)) => {
                                 inner_m.map_opacity = Some((p, sampling, OpacityFrom::Luminance));
                             }
+                            Some(c @ Color::Procedural(_)) => {
+                                self.warn(
+                                    "mask procedural",
+                                    format!("{}: a checkerboard as mask opacity is not supported: rendered with its mean", el.at),
+                                );
+                                let v = self.mean_rgb(c, &el.at)?;
+                                inner_m.opacity *= (v[0] + v[1] + v[2]) / 3.0;
+                            }
                         }
                     }
                     "bumpmap" | "normalmap" => {
-                        self.mark_all(el);
-                        self.warn(
-                            &format!("bsdf {kind}"),
-                            format!("{}: {kind} is not supported: rendered without it", el.at),
-                        );
+                        inner_m.normal_map = Some(self.normal_map(el, kind)?)
                     }
                     _ => {}
                 }
@@ -384,6 +393,73 @@ impl<'a> Loader<'a> {
         m.one_sided = !matches!(kind, "thindielectric" | "null");
         self.unused(el, &format!("bsdf '{kind}'"));
         Ok(m)
+    }
+
+    /// The texture of a `normalmap` or `bumpmap` (its one texture child, whatever its
+    /// name, as Mitsuba takes it): a raw bitmap, or a constant.
+    fn normal_map(&self, el: &'a El, kind: &str) -> R<NormalMap> {
+        let mut textures = el.children.iter().filter(|c| {
+            c.tag == "texture"
+                || (c.tag == "ref" && self.resolve(c).map(|r| r.tag == "texture").unwrap_or(false))
+        });
+        let p = textures
+            .next()
+            .ok_or_else(|| format!("{}: {kind} needs a <texture>", el.at))?;
+        if let Some(extra) = textures.next() {
+            return Err(format!(
+                "{}: {kind} takes one texture, a second is at {}",
+                el.at, extra.at
+            ));
+        }
+        p.used.set(true);
+        let t = self.resolve(p)?;
+        let texture = match t.kind() {
+            "bitmap" => {
+                let (path, sampling, raw) = self.bitmap(t, true)?;
+                let mut tex = Texture::load_as(&path, raw)
+                    .map_err(|e| format!("{}: {kind} texture: {e}", t.at))?;
+                tex.sampling = sampling;
+                tex
+            }
+            _ => {
+                // a constant (Mitsuba's rawconstant, rgb, ...): one texel, not decoded
+                let v = match t.kind() {
+                    "rawconstant" => {
+                        let v = self
+                            .prop(t, "value")
+                            .ok_or_else(|| format!("{}: rawconstant needs a value", t.at))?;
+                        let c = self.vec3_attr(v, "value")?;
+                        self.unused(t, "texture 'rawconstant'");
+                        [c.x, c.y, c.z]
+                    }
+                    _ => match self.color_of(p, Use::Unbounded)? {
+                        Color::Rgb(v) => v,
+                        c => self.mean_rgb(c, &t.at)?,
+                    },
+                };
+                Texture {
+                    width: 1,
+                    height: 1,
+                    texels: vec![v],
+                    sampling: Default::default(),
+                }
+            }
+        };
+        Ok(match kind {
+            "normalmap" => NormalMap::Normals(std::sync::Arc::new(texture)),
+            _ => {
+                let scale = self.float(el, "scale")?.unwrap_or(1.0);
+                // a scalar height: the luminance, as Mitsuba's eval_1 of a colour bitmap
+                let mut heights = texture;
+                for t in &mut heights.texels {
+                    *t = [0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]; 3];
+                }
+                NormalMap::Bumps {
+                    heights: std::sync::Arc::new(heights),
+                    scale,
+                }
+            }
+        })
     }
 
     /// The material index of a BSDF element (a referenced one is built once).

@@ -23,6 +23,12 @@ impl<'a> Loader<'a> {
         let (intensity, texture, (w, h)) = match self.color(el, "irradiance", Use::Unbounded)? {
             None => (UNIT_EMISSION, None, (1, 1)),
             Some(Color::Rgb(c)) => (c, None, (1, 1)),
+            Some(Color::Procedural(_)) => {
+                return Err(format!(
+                    "{}: projector emitter: irradiance: a bitmap or a constant is expected",
+                    el.at
+                ))
+            }
             Some(Color::Bitmap(p, _)) => {
                 let t = crate::scene::Texture::load(&p)
                     .map_err(|e| format!("{}: projector emitter: {e}", el.at))?;
@@ -99,6 +105,12 @@ impl<'a> Loader<'a> {
                     Some(Color::Rgb(c)) => {
                         return Err(format!(
                             "{}: spot emitter: texture {c:?}: a bitmap is expected (scale the intensity instead)",
+                            el.at
+                        ))
+                    }
+                    Some(Color::Procedural(_)) => {
+                        return Err(format!(
+                            "{}: spot emitter: texture: a bitmap is expected",
                             el.at
                         ))
                     }

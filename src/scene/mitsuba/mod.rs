@@ -13,13 +13,15 @@
 //!   ones with their `distribution`, Beckmann unless it says ggx; dielectrics with their
 //!   `specular_reflectance` / `specular_transmittance` tints; the MTL fields are set
 //!   close to them too), `twosided`, `mask` (its `opacity`, a constant or a bitmap: a
-//!   cut-out that rays pass through, on any shape), `bumpmap`, `normalmap` (the nested
-//!   BSDF; bumps warned), Mitsuba 0.6's `phong` and `roughdiffuse`;
+//!   cut-out that rays pass through, on any shape), `bumpmap` and `normalmap` (the nested
+//!   BSDF shaded with the normal from a raw bitmap or a constant, see
+//!   `scene::texture_normal`), Mitsuba 0.6's `phong` and `roughdiffuse`;
 //! - `rgb`, `srgb`, `spectrum` (a constant, `wavelength:value` lists and `.spd` files,
 //!   integrated against the CIE 1931 curves as Mitsuba's RGB mode does: reflectances under
 //!   D65, emission as an equal-energy spectrum), `bitmap` textures with `filter_type`
-//!   (bilinear, nearest), `wrap_mode` (repeat, mirror, clamp) and `to_uv` (`map_kd` for
-//!   diffuse reflectances, a mask's opacity; the texture's mean, warned, in other slots);
+//!   (bilinear, nearest), `wrap_mode` (repeat, mirror, clamp) and `to_uv`, and
+//!   `checkerboard` (`color0`, `color1`, `to_uv`) (`map_kd` for diffuse reflectances, a
+//!   mask's opacity; the texture's mean, warned, in other slots);
 //! - emitters `area` (on a shape: `ke`), `point`, `spot` (`cutoff_angle`, `beam_width`,
 //!   a bitmap `texture` projected over the cone), `projector` (`irradiance`, a constant or
 //!   a bitmap, `scale`, `fov` / `focal_length` / `fov_axis`), `directional` (`irradiance`,

@@ -552,6 +552,7 @@ pub(super) fn known_plugin(tag: &str, kind: &str) -> bool {
         "texture" => &[
             "bitmap",
             "checkerboard",
+            "rawconstant",
             "mesh_attribute",
             "volume",
             "gridtexture",

@@ -17,6 +17,8 @@ pub(super) enum Color {
     Rgb([f32; 3]),
     /// A bitmap texture: its file and how it is looked up.
     Bitmap(PathBuf, crate::scene::texture::Sampling),
+    /// A texture made here (Mitsuba's `checkerboard`).
+    Procedural(crate::scene::Texture),
 }
 
 /// What is said of a negative colour value.
@@ -457,50 +459,33 @@ impl<'a> Loader<'a> {
                 }
                 match kind {
                     "bitmap" => {
-                        let f = self.string(p, "filename")?.ok_or_else(|| {
-                            format!("{}: bitmap texture without a filename", p.at)
-                        })?;
-                        let path = self.path(&f);
-                        crate::input::check_regular_file(&path, crate::input::max_input_bytes()?)
-                            .map_err(|e| format!("{}: bitmap texture: {e}", p.at))?;
-                        let sampling = self.bitmap_sampling(p)?;
-                        for k in ["raw", "format"] {
-                            if let Some(c) = self.prop(p, k) {
-                                let v = c.attr("value").unwrap_or("");
-                                if !matches!((k, v), ("raw", "false")) {
-                                    self.warn(
-                                        &format!("bitmap {k}"),
-                                        format!(
-                                            "{}: bitmap {k} '{v}' is not supported: sRGB-decoded 8-bit or linear EXR",
-                                            c.at
-                                        ),
-                                    );
-                                }
-                            }
-                        }
-                        self.unused(p, "texture 'bitmap'");
+                        let (path, sampling, _) = self.bitmap(p, false)?;
                         Ok(Color::Bitmap(path, sampling))
                     }
                     "checkerboard" => {
-                        let a = self.color(p, "color0", use_)?;
-                        let b = self.color(p, "color1", use_)?;
-                        let a = match a {
-                            Some(c) => self.mean_rgb(c, &p.at)?,
-                            None => [0.4; 3],
+                        // each colour a constant (a texture inside gives its mean, warned)
+                        let colour = |name: &str, default: f32| -> R<[f32; 3]> {
+                            match self.color(p, name, use_)? {
+                                None => Ok([default; 3]),
+                                Some(Color::Rgb(v)) => Ok(v),
+                                Some(c) => {
+                                    self.warn(
+                                        "checkerboard of textures",
+                                        format!(
+                                            "{}: a texture as checkerboard '{name}' is not supported: rendered with its mean",
+                                            p.at
+                                        ),
+                                    );
+                                    self.mean_rgb(c, &p.at)
+                                }
+                            }
                         };
-                        let b = match b {
-                            Some(c) => self.mean_rgb(c, &p.at)?,
-                            None => [0.2; 3],
-                        };
-                        self.mark_all(p);
-                        self.warn(
-                            "texture checkerboard",
-                            format!(
-                                "{}: checkerboard texture is not supported: rendered as the mean of its colours",
-                                p.at
-                            ),
-                        );
-                        Ok(Color::Rgb([0, 1, 2].map(|i| 0.5 * (a[i] + b[i]))))
+                        let (a, b) = (colour("color0", 0.4)?, colour("color1", 0.2)?);
+                        let to_uv = self.to_uv(p)?;
+                        self.unused(p, "texture 'checkerboard'");
+                        Ok(Color::Procedural(crate::scene::Texture::checkerboard(
+                            a, b, to_uv,
+                        )))
                     }
                     k => {
                         self.mark_all(p);
@@ -520,6 +505,48 @@ impl<'a> Loader<'a> {
                 p.at
             )),
         }
+    }
+
+    /// A `bitmap` texture element: its file (checked to be one), its lookup, and its
+    /// `raw` flag (8-bit values not sRGB-decoded), which is warned unless `raw_read` (the
+    /// caller reads it).
+    pub(super) fn bitmap(
+        &self,
+        p: &'a El,
+        raw_read: bool,
+    ) -> R<(PathBuf, crate::scene::texture::Sampling, bool)> {
+        let f = self
+            .string(p, "filename")?
+            .ok_or_else(|| format!("{}: bitmap texture without a filename", p.at))?;
+        let path = self.path(&f);
+        crate::input::check_regular_file(&path, crate::input::max_input_bytes()?)
+            .map_err(|e| format!("{}: bitmap texture: {e}", p.at))?;
+        let sampling = self.bitmap_sampling(p)?;
+        let raw = self.boolean(p, "raw")?.unwrap_or(false);
+        if raw && !raw_read {
+            self.warn(
+                "bitmap raw",
+                format!(
+                    "{}: bitmap raw 'true' is not supported here: sRGB-decoded 8-bit or linear EXR",
+                    p.at
+                ),
+            );
+        }
+        // Mitsuba's `format` sets the precision it keeps the texels in
+        if let Some(c) = self.prop(p, "format") {
+            let v = c.attr("value").unwrap_or("");
+            if v != "variant" {
+                self.warn(
+                    "bitmap format",
+                    format!(
+                        "{}: bitmap format '{v}' is not supported: sRGB-decoded 8-bit or linear EXR",
+                        c.at
+                    ),
+                );
+            }
+        }
+        self.unused(p, "texture 'bitmap'");
+        Ok((path, sampling, raw))
     }
 
     /// A bitmap's `filter_type`, `wrap_mode` and `to_uv`.
@@ -547,14 +574,20 @@ impl<'a> Loader<'a> {
                 ))
             }
         };
+        s.to_uv = self.to_uv(p)?;
+        Ok(s)
+    }
+
+    /// A texture's `to_uv` as [`crate::scene::texture::Sampling::to_uv`] holds it.
+    fn to_uv(&self, p: &'a El) -> R<[f32; 6]> {
         let m = self.transform(p, "to_uv")?;
-        s.to_uv = [
+        let to_uv = [
             m.x_axis.x, m.y_axis.x, m.w_axis.x, m.x_axis.y, m.y_axis.y, m.w_axis.y,
         ];
-        if !s.to_uv.iter().all(|v| v.is_finite()) {
-            return Err(format!("{}: bitmap to_uv is not finite", p.at));
+        if !to_uv.iter().all(|v| v.is_finite()) {
+            return Err(format!("{}: texture to_uv is not finite", p.at));
         }
-        Ok(s)
+        Ok(to_uv)
     }
 
     /// The mean of a colour (a bitmap's mean texel).
@@ -564,6 +597,7 @@ impl<'a> Loader<'a> {
             Color::Bitmap(p, _) => crate::scene::Texture::load(&p)
                 .map(|t| t.mean())
                 .map_err(|e| format!("{at}: {e}")),
+            Color::Procedural(t) => Ok(t.mean()),
         }
     }
 
@@ -578,7 +612,7 @@ impl<'a> Loader<'a> {
         match self.color(el, name, use_)? {
             None => Ok(None),
             Some(Color::Rgb(v)) => Ok(Some(v)),
-            Some(c @ Color::Bitmap(..)) => {
+            Some(c) => {
                 self.warn(
                     &format!("texture in {plugin} {name}"),
                     format!(

@@ -750,3 +750,107 @@ fn an_empty_scene_names_what_was_left_out() {
         "{e}"
     );
 }
+
+/// A `checkerboard` reflectance is a texture of its two colours (not their mean, which
+/// was rendered before), with its `to_uv`; a colour that is no number is one line.
+#[test]
+fn checkerboard_reflectance_is_a_texture() {
+    let d = scene(
+        r#"<shape type="rectangle"><bsdf type="diffuse">
+           <texture name="reflectance" type="checkerboard">
+             <rgb name="color0" value="1 0 0"/><float name="color1" value="0.25"/>
+             <transform name="to_uv"><scale x="5" y="5"/></transform>
+           </texture></bsdf></shape>"#,
+    )
+    .unwrap();
+    assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+    let t = d.materials[0].kd_procedural.as_deref().expect("a texture");
+    assert_eq!(t.lookup(0.05, 0.95), [1.0, 0.0, 0.0]);
+    assert_eq!(t.lookup(0.15, 0.95), [0.25; 3]);
+    assert_eq!(t.sampling.to_uv, [5.0, 0.0, 0.0, 0.0, 5.0, 0.0]);
+    let s = crate::scene::Scene::build(d, 0.0).unwrap();
+    assert_eq!(s.materials[0].kd_texture, Some(0));
+    // Mitsuba's defaults: 0.4 and 0.2
+    let d = scene(r#"<shape type="rectangle"><bsdf type="diffuse"><texture name="reflectance" type="checkerboard"/></bsdf></shape>"#).unwrap();
+    let t = d.materials[0].kd_procedural.as_deref().unwrap();
+    assert_eq!(t.texels, vec![[0.4; 3], [0.2; 3], [0.2; 3], [0.4; 3]]);
+    let e = scene(
+        r#"<shape type="rectangle"><bsdf type="diffuse">
+           <texture name="reflectance" type="checkerboard"><float name="color0" value="red"/>
+           </texture></bsdf></shape>"#,
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("t.xml:3") && e.contains("color0") && !e.contains('\n'),
+        "{e}"
+    );
+}
+
+/// `normalmap` and `bumpmap` shade the nested BSDF with the texture's normal: on
+/// Mitsuba's rectangle (dp/du along +x) a normal map of raw colour (0.8, 0.5, 0.9)
+/// (n = (0.6, 0, 0.8) in the tangent frame) turns the hit's shading normal to
+/// (0.6, 0, 0.8); a PNG's 8-bit values are read raw (204 / 255 = 0.8, not decoded
+/// from sRGB); a bump map of constant height leaves it. A missing bitmap, a scale that is no
+/// number and a wrapper without a texture are one line each.
+#[test]
+fn normal_and_bump_maps_turn_the_shading_normal() {
+    use crate::math::Ray;
+    let dir = std::env::temp_dir().join(format!("kalos-nmap-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    image::RgbImage::from_fn(4, 4, |_, _| image::Rgb([204, 128, 230]))
+        .save(dir.join("n.png"))
+        .unwrap();
+    let load = |bsdf: &str| {
+        parse(
+            &format!(
+                "<scene version=\"3.0.0\">\n<shape type=\"rectangle\">{bsdf}</shape>\n</scene>"
+            ),
+            "t.xml",
+            &dir,
+        )
+    };
+    let normal_at_centre = |bsdf: &str| {
+        let d = load(bsdf).unwrap();
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+        let s = crate::scene::Scene::build(d, 0.0).unwrap();
+        assert!(s.normal_maps);
+        let r = Ray::new(Vec3::new(0.1, 0.2, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        s.intersect(&r, f32::INFINITY).unwrap().ns
+    };
+    let want = Vec3::new(0.6, 0.0, 0.8);
+    let n = normal_at_centre(
+        r#"<bsdf type="normalmap"><texture name="normalmap" type="rawconstant">
+           <vector name="value" value="0.8, 0.5, 0.9"/></texture><bsdf type="diffuse"/></bsdf>"#,
+    );
+    assert!((n - want).length() < 1e-5, "{n}");
+    let n = normal_at_centre(
+        r#"<bsdf type="normalmap"><texture name="normalmap" type="bitmap">
+           <boolean name="raw" value="true"/><string name="filename" value="n.png"/></texture>
+           <bsdf type="diffuse"/></bsdf>"#,
+    );
+    assert!((n - want).length() < 1e-2, "{n}");
+    let n = normal_at_centre(
+        r#"<bsdf type="bumpmap"><float name="scale" value="3"/>
+           <texture type="bitmap"><boolean name="raw" value="true"/>
+           <string name="filename" value="n.png"/></texture><bsdf type="diffuse"/></bsdf>"#,
+    );
+    assert!((n - Vec3::Z).length() < 1e-6, "{n}");
+    for (bsdf, needle) in [
+        (
+            r#"<bsdf type="bumpmap"><texture type="bitmap"><string name="filename" value="none.png"/></texture><bsdf type="diffuse"/></bsdf>"#,
+            "t.xml:2: bitmap texture",
+        ),
+        (
+            r#"<bsdf type="bumpmap"><float name="scale" value="big"/><texture type="bitmap"><string name="filename" value="n.png"/></texture><bsdf type="diffuse"/></bsdf>"#,
+            "not a number",
+        ),
+        (
+            r#"<bsdf type="normalmap"><bsdf type="diffuse"/></bsdf>"#,
+            "t.xml:2: normalmap needs a <texture>",
+        ),
+    ] {
+        let e = load(bsdf).unwrap_err();
+        assert!(e.contains(needle) && !e.contains('\n'), "{bsdf}: {e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
