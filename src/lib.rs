@@ -33,3 +33,4 @@ pub mod report;
 pub mod sampling;
 pub mod scene;
 pub mod spectrum;
+pub mod texture;

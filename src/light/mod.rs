@@ -106,7 +106,7 @@ pub struct Spot {
     /// Angles in radians.
     pub cutoff: f32,
     pub beam_width: f32,
-    pub texture: Option<Arc<crate::scene::texture::Texture>>,
+    pub texture: Option<Arc<crate::texture::Texture>>,
     /// A projector's tan of half its field of view along x and y.
     pub frustum: Option<[f32; 2]>,
 }

@@ -22,7 +22,7 @@ pub struct Material {
     pub opacity: f32,
     pub opacity_texture: Option<u32>,
     /// The shading normal from a texture (Mitsuba's `normalmap`, `bumpmap`).
-    pub normal_map: Option<crate::scene::texture_normal::NormalMap>,
+    pub normal_map: Option<crate::texture::normal::NormalMap>,
 }
 
 impl Material {

@@ -181,7 +181,7 @@ impl Scene {
         let tangents = self
             .uvs
             .get(i)
-            .and_then(|uvs| super::texture_normal::tangents(&self.tris[i], uvs));
+            .and_then(|uvs| crate::texture::normal::tangents(&self.tris[i], uvs));
         let (dp_du, dp_dv) = tangents.unwrap_or_else(|| ng.any_orthonormal_pair());
         map.perturb(uv, ng, ns, dp_du, dp_dv)
     }

@@ -9,14 +9,14 @@ pub mod mitsuba;
 pub mod mtl;
 pub mod obj;
 pub mod ply;
-pub mod texture;
-pub mod texture_normal;
+
 pub mod toml_scene;
 pub mod tri_attr;
 
+pub use crate::texture::Texture;
+use crate::texture::{self, normal as texture_normal};
 pub use camera::{Camera, CameraDesc, FovAxis};
 pub use hit::{Shading, SurfaceHit};
-pub use texture::Texture;
 
 use crate::accel::Bvh;
 use crate::light::Lights;

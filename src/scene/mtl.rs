@@ -387,8 +387,8 @@ pub fn parse_mtl(
                 let name = map_file_name(args, file, line_no, key)?;
                 m.map_opacity = Some((
                     normalise_path(dir, name),
-                    super::texture::Sampling::default(),
-                    super::texture::OpacityFrom::AlphaOrGrey,
+                    crate::texture::Sampling::default(),
+                    crate::texture::OpacityFrom::AlphaOrGrey,
                 ));
             }
             "map_Kd" => {
@@ -597,7 +597,7 @@ mod tests {
     /// file); dissolve and map_d are the surface's opacity (a cut-out), `d 0` said.
     #[test]
     fn what_is_not_rendered_is_said() {
-        use crate::scene::texture::OpacityFrom;
+        use crate::texture::OpacityFrom;
         let text = "newmtl a\nKd 0.5 0.5 0.5\nmap_Bump -bm 0.3 a n.png\nmap_d leaf.png\nd 0.25\n\
                     newmtl b\nKd 0.5 0.5 0.5\nbump b.png\nmap_Bump c.png\nTr 0\nd 1\n\
                     newmtl c\nKs 1 1 1\nNi 1.5\nd 0.1\nillum 7\n\

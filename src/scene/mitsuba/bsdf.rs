@@ -3,8 +3,8 @@
 use super::*;
 use crate::material::conductor::fresnel_conductor;
 use crate::material::dielectric::{fresnel_dielectric, Tint};
-use crate::scene::texture::{OpacityFrom, Texture};
-use crate::scene::texture_normal::NormalMap;
+use crate::texture::normal::NormalMap;
+use crate::texture::{OpacityFrom, Texture};
 
 /// A normalized-Phong exponent with about the spread of a GGX lobe of roughness alpha.
 pub(super) fn phong_exponent(alpha: f32) -> f32 {

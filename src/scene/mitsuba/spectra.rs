@@ -16,7 +16,7 @@ pub(super) enum Use {
 pub(super) enum Color {
     Rgb([f32; 3]),
     /// A bitmap texture: its file and how it is looked up.
-    Bitmap(PathBuf, crate::scene::texture::Sampling),
+    Bitmap(PathBuf, crate::texture::Sampling),
     /// A texture made here (Mitsuba's `checkerboard`).
     Procedural(crate::scene::Texture),
 }
@@ -514,7 +514,7 @@ impl<'a> Loader<'a> {
         &self,
         p: &'a El,
         raw_read: bool,
-    ) -> R<(PathBuf, crate::scene::texture::Sampling, bool)> {
+    ) -> R<(PathBuf, crate::texture::Sampling, bool)> {
         let f = self
             .string(p, "filename")?
             .ok_or_else(|| format!("{}: bitmap texture without a filename", p.at))?;
@@ -550,8 +550,8 @@ impl<'a> Loader<'a> {
     }
 
     /// A bitmap's `filter_type`, `wrap_mode` and `to_uv`.
-    fn bitmap_sampling(&self, p: &'a El) -> R<crate::scene::texture::Sampling> {
-        use crate::scene::texture::{Sampling, Wrap};
+    fn bitmap_sampling(&self, p: &'a El) -> R<crate::texture::Sampling> {
+        use crate::texture::{Sampling, Wrap};
         let mut s = Sampling::default();
         match self.string(p, "filter_type")?.as_deref() {
             None | Some("bilinear") => {}
@@ -578,7 +578,7 @@ impl<'a> Loader<'a> {
         Ok(s)
     }
 
-    /// A texture's `to_uv` as [`crate::scene::texture::Sampling::to_uv`] holds it.
+    /// A texture's `to_uv` as [`crate::texture::Sampling::to_uv`] holds it.
     fn to_uv(&self, p: &'a El) -> R<[f32; 6]> {
         let m = self.transform(p, "to_uv")?;
         let to_uv = [

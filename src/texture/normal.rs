@@ -13,7 +13,7 @@
 //!   n_s . dp/du), dp/dv' likewise, and n = dp/du' x dp/dv' turned to the geometric
 //!   normal's side.
 
-use super::texture::Texture;
+use super::Texture;
 use crate::math::{Vec2, Vec3};
 use std::sync::Arc;
 
@@ -79,7 +79,7 @@ impl NormalMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::texture::Sampling;
+    use crate::texture::Sampling;
 
     fn flat(c: [f32; 3]) -> Arc<Texture> {
         Arc::new(Texture {

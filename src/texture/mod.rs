@@ -4,6 +4,8 @@
 //! Mitsuba's `checkerboard` is the 2 x 2 texture of its two colours, looked up nearest and
 //! repeated ([`Texture::checkerboard`]).
 
+pub mod normal;
+
 use std::path::Path;
 
 /// What a lookup does outside [0, 1) (Mitsuba's `wrap_mode`).
