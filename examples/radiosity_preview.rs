@@ -3,7 +3,7 @@
 //!
 //!   cargo run --release --example radiosity_preview -- cornell 0.05 out.exr [ref.exr [SPP]]
 //!
-//! Issue 9's table of the preview's bias against plain path tracing at three mesh sizes.
+//! The table of the preview's bias against plain path tracing at three mesh sizes.
 //! With SPP, the gather path tracer (`integrator::gather`, gather depth 1) at SPP samples
 //! per pixel instead of the preview.
 

@@ -360,7 +360,7 @@ fn info_counts_skipped_zero_area_faces() {
     assert!(out.contains("\"skipped_degenerate\": 2"), "{out}");
 }
 
-// ---- issue 15: hostile and careless input -------------------------------------------
+// ---- hostile and careless input ------------------------------------------------------
 
 /// A little-endian PFM (negative scale) of `w` x `h` RGB pixels, all of value `v` except
 /// the first, which is `first`.

@@ -1,4 +1,4 @@
-//! Known answers for the microfacet materials and the distant lights (issue 14): a convex
+//! Known answers for the microfacet materials and the distant lights: a convex
 //! object under a constant environment of radiance 1 sees nothing but the environment, so
 //! each pixel is the object's directional albedo there: exactly 1 for glass, a thin slab
 //! and a perfect mirror (whatever the path), about 1 for a white plastic, below 1 for a

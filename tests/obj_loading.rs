@@ -560,7 +560,7 @@ fn missing_and_bad_files_are_errors_naming_the_file() {
     assert!(e.contains("x.obj"), "{e}");
 }
 
-// ---- issue 15: hostile and careless input -------------------------------------------
+// ---- hostile and careless input ------------------------------------------------------
 
 /// Geometric normal of a triangle from its winding: (v1 - v0) x (v2 - v0).
 fn winding_normal(t: &[Vec3; 3]) -> Vec3 {
