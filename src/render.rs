@@ -381,10 +381,9 @@ pub fn choose_method(
     let chosen = pilots.iter().find(|p| p.kind == kind).expect("a candidate");
     let (noise, second_seconds) = pipeline::auto::thresholds_over_sd(scene, set, chosen)?;
     let pilot_seconds: f64 = pilots.iter().map(|p| p.seconds).sum::<f64>() + second_seconds;
-    let spp = match (job.time, job.spp) {
-        (Some(t), _) => (t - pilot_seconds).max(0.0) / chosen.seconds_per_spp.max(1e-12),
-        (None, Some(n)) => n as f64,
-        (None, None) => default_spp(scene) as f64,
+    let spp = match job.budget(scene) {
+        JobBudget::Time(t) => (t - pilot_seconds).max(0.0) / chosen.seconds_per_spp.max(1e-12),
+        b => b.spp().unwrap_or_else(|| default_spp(scene)) as f64,
     };
     // (named only where it differs from what no name gives: a plain render's film key is
     // then the same as that of the same render asked for with `--method plain`)
@@ -431,12 +430,11 @@ pub fn render_strategies(
     job.validate()?;
     let set = job.settings(scene);
     crate::film::check_resolution(set.width, set.height)?;
-    let spp = match (job.spp, job.time) {
-        (Some(n), _) => n,
-        (None, None) => default_spp(scene),
-        (None, Some(_)) => {
+    let spp = match job.budget(scene) {
+        JobBudget::Time(_) => {
             return Err("--bdpt-strategies: give --spp (the strategy images are a fixed number of samples, not --time)".into())
         }
+        b => b.spp().unwrap_or_else(|| default_spp(scene)),
     };
     let (pool, _) = thread_pool(job.threads)?;
     pool.install(|| {

@@ -32,7 +32,7 @@
 //! few pixels carry most of the noise (a small bright emitter's fireflies), which the share
 //! of pixels off does not see and the filter removes.
 
-use super::render::{render, Budget, RenderSettings};
+use super::render::{render, Budget, RenderOutput, RenderSettings};
 use crate::film::Film;
 use crate::integrator::{Integrator, IntegratorKind};
 use crate::progress::Silent;
@@ -121,17 +121,24 @@ fn pilot_settings(set: &RenderSettings, kind: IntegratorKind) -> RenderSettings 
     p
 }
 
+/// `PILOT_SPP` samples per pixel with the pilot's settings `p`: the film, the rendering
+/// seconds, and its pixels' values.
+fn run(scene: &Scene, p: &RenderSettings) -> Result<(RenderOutput, Vec<[f64; 3]>), String> {
+    let integrator = Integrator::prepare(scene, p.integrator, p.spectral.bands(), &Silent)?;
+    let out = render(scene, &integrator, p, Budget::Spp(PILOT_SPP), 0, &Silent)?;
+    let image = (0..out.film.pixels.len())
+        .map(|i| out.film.value(i))
+        .collect();
+    Ok((out, image))
+}
+
 /// Render the pilot of estimator `kind`.
 pub fn pilot(scene: &Scene, set: &RenderSettings, kind: IntegratorKind) -> Result<Pilot, String> {
     let t0 = std::time::Instant::now();
     let p = pilot_settings(set, kind);
-    let integrator = Integrator::prepare(scene, p.integrator, p.spectral.bands(), &Silent)?;
-    let out = render(scene, &integrator, &p, Budget::Spp(PILOT_SPP), 0, &Silent)?;
+    let (out, image) = run(scene, &p)?;
     let seconds = t0.elapsed().as_secs_f64();
     let (rel_var, mean, mean_se) = statistics(&out.film, PILOT_SPP);
-    let image = (0..out.film.pixels.len())
-        .map(|i| out.film.value(i))
-        .collect();
     let pixels = p.width as f64 * p.height as f64;
     let full = set.width as f64 * set.height as f64;
     Ok(Pilot {
@@ -162,11 +169,7 @@ pub fn thresholds_over_sd(
     let t0 = std::time::Instant::now();
     let mut p = pilot_settings(set, first.kind);
     p.sampler.seed ^= 0x5ec0_4d00_0000_0001;
-    let integrator = Integrator::prepare(scene, p.integrator, p.spectral.bands(), &Silent)?;
-    let out = render(scene, &integrator, &p, Budget::Spp(PILOT_SPP), 0, &Silent)?;
-    let second: Vec<[f64; 3]> = (0..out.film.pixels.len())
-        .map(|i| out.film.value(i))
-        .collect();
+    let (_, second) = run(scene, &p)?;
     let r = threshold_over_error(&first.image, &second, p.width as usize, PILOT_SPP);
     Ok((r, t0.elapsed().as_secs_f64()))
 }

@@ -406,3 +406,36 @@ fn energy_post_filter(film: &Film, image: &RgbImage, rw: &RwParams) -> Result<Rg
     let data = out.image.iter().map(|c| c.map(|v| v as f32)).collect();
     Ok(RgbImage::new(image.width, image.height, data))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Passes that must not run: the job is refused before any.
+    struct NoPasses;
+    impl DtfPasses for NoPasses {
+        fn run(&mut self, _: DtfPass<'_>) -> Result<(Film, Vec<u64>, Counters), String> {
+            panic!("a pass ran for a refused job")
+        }
+    }
+
+    /// A distributed DTF render refuses, in one line and before any pass, a job that is
+    /// not DTF's and a budget in seconds.
+    #[test]
+    fn distributed_dtf_refuses_other_methods_and_time() {
+        let scene = crate::scene::load("cornell").unwrap();
+        let silent = crate::progress::Silent;
+        let mut j = RenderJob::new("cornell");
+        j.method = Method::Plain;
+        let Err(e) = render_dtf_with(&scene, &j, &mut NoPasses, &silent) else {
+            panic!("a plain job was accepted")
+        };
+        assert!(e.contains("--method dtf") && !e.contains('\n'), "{e}");
+        j.method = Method::Dtf;
+        j.time = Some(3.0);
+        let Err(e) = render_dtf_with(&scene, &j, &mut NoPasses, &silent) else {
+            panic!("a time budget was accepted")
+        };
+        assert!(e.starts_with("--time") && e.contains("--spp"), "{e}");
+    }
+}

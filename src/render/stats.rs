@@ -116,9 +116,7 @@ impl RenderStats {
         dtf: Option<DtfStats>,
         rw: Option<RwStats>,
     ) -> RenderStats {
-        let RunFigures {
-            counters, seconds, ..
-        } = run;
+        let (counters, seconds) = (run.counters, run.seconds);
         RenderStats {
             scene: scene.info.name.clone(),
             width: set.width,
