@@ -15,12 +15,18 @@
 #               triangles (bench/heightfield.py, written by this script; diffuse only, so both
 #               render the same BSDFs), 128x128, depth 8, no roulette
 #   mesh-1      the mesh on one core against scalar_rgb (pinned as cornell-1)
+#   open        an open 1M-triangle scene: the same height field alone under one light (no walls;
+#               bench/heightfield.py --open, written by this script), seen from above at an angle,
+#               128x128, depth 8, no roulette: most paths leave after a bounce or two, and the
+#               camera and shadow rays are coherent
+#   open-1      the open height field on one core against scalar_rgb (pinned as cornell-1)
 #   room        an interior of the size users render: assets/scenes/room.obj (4,226 triangles:
 #               walls, furniture, four ceiling lights), its materials made diffuse (Kd, Ke; the
 #               floor's Phong lobe dropped, as render_obj.py reads only Kd and Ke) in a copy under
 #               /tmp, 256x256, depth 8, no roulette, from kalos' default camera in the room
 #   room-1      the room on one core against scalar_rgb (pinned as cornell-1)
 #   all         all of the above
+#   two-threads the four two-thread cases against llvm_ad_rgb: cornell room mesh open
 #
 # Before the figures it prints the CPU model, its vector extensions and the SIMD path kalos
 # chose (its `--stats` field `simd`; KALOS_SIMD=sse2 forces the baseline path).
@@ -29,9 +35,10 @@
 # bench/mitsuba-setup.sh.
 #
 # Environment overrides:
-#   CASES (cornell)  SPP (256; the mesh cases use SPP_MESH, 16)  REPS (3)  THREADS (2: kalos
+#   CASES (cornell)  SPP (256; the mesh cases use SPP_MESH, 16; the open ones SPP_OPEN, 128)  REPS (3)  THREADS (2: kalos
 #   --threads, and Mitsuba's Dr.Jit thread count when the machine has more cores than that)
 #   VARIANT (llvm_ad_rgb)  VARIANT_1 (the one-core cases' Mitsuba variant: scalar_rgb)  MESH (/tmp/kalos-bench-heightfield.obj)
+#   OPEN (/tmp/kalos-bench-open.obj)
 #   MITSUBA_VENV (/tmp/mitsuba)  LIBLLVM_PATH (/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1)
 #   MITSUBA_DIR (/work/shared/bench/mitsuba)  KALOS (target/release/kalos)
 set -euo pipefail
@@ -41,11 +48,13 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."   # repository root
 CASES=${CASES:-cornell}
 SPP=${SPP:-256}
 SPP_MESH=${SPP_MESH:-16}
+SPP_OPEN=${SPP_OPEN:-128}
 REPS=${REPS:-3}
 THREADS=${THREADS:-2}
 VARIANT=${VARIANT:-llvm_ad_rgb}
 VARIANT_1=${VARIANT_1:-scalar_rgb}
 MESH=${MESH:-/tmp/kalos-bench-heightfield.obj}
+OPEN=${OPEN:-/tmp/kalos-bench-open.obj}
 MITSUBA_VENV=${MITSUBA_VENV:-/tmp/mitsuba}
 LIBLLVM_PATH=${LIBLLVM_PATH:-/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1}
 MITSUBA_DIR=${MITSUBA_DIR:-/work/shared/bench/mitsuba}
@@ -54,6 +63,7 @@ MI_OUT=/tmp/mitsuba-bench.exr
 K_OUT=/tmp/kalos-bench.exr
 K_STATS=/tmp/kalos-stats.json
 MESH_CAM=(0 1.3 0.95 0 0 -0.3 0 1 0 60)
+OPEN_CAM=(0 2.6 2.6 0 0 0 0 1 0 45)
 ROOM_DIR=/tmp/kalos-bench-room
 ROOM=$ROOM_DIR/room.obj
 ROOM_CAM=(5.6786 1.5 3.2143 4.6786 1.5 3.2143 0 1 0 60)
@@ -66,10 +76,11 @@ die() { echo "compare-mitsuba: ERROR: $*" >&2; exit 1; }
 [[ -f "$MITSUBA_DIR/render_obj.py" && -f "$MITSUBA_DIR/cornell-box.obj" ]] \
     || die "render_obj.py / cornell-box.obj not found in $MITSUBA_DIR"
 export DRJIT_LIBLLVM_PATH="$LIBLLVM_PATH"
-[[ $CASES == all ]] && CASES="cornell cornell-1 cornell-rr mesh mesh-1 room room-1"
+[[ $CASES == all ]] && CASES="cornell cornell-1 cornell-rr mesh mesh-1 room room-1 open open-1"
+[[ $CASES == two-threads ]] && CASES="cornell room mesh open"
 for c in $CASES; do
-    case $c in cornell | cornell-1 | cornell-rr | mesh | mesh-1 | room | room-1) ;;
-    *) die "unknown case '$c' in CASES (cornell, cornell-1, cornell-rr, mesh, mesh-1, room, room-1, all)" ;;
+    case $c in cornell | cornell-1 | cornell-rr | mesh | mesh-1 | room | room-1 | open | open-1) ;;
+    *) die "unknown case '$c' in CASES (cornell, cornell-1, cornell-rr, mesh, mesh-1, room, room-1, open, open-1, all, two-threads)" ;;
     esac
 done
 if [[ " $CASES " == *"-1 "* ]]; then
@@ -112,6 +123,10 @@ if [[ " $CASES " == *" mesh"* && ! -s $MESH ]]; then
     echo "compare-mitsuba: generating $MESH (bench/heightfield.py)" >&2
     "$MITSUBA_VENV/bin/python" bench/heightfield.py "$MESH" 1000000 || die "could not generate $MESH"
 fi
+if [[ " $CASES " == *" open"* && ! -s $OPEN ]]; then
+    echo "compare-mitsuba: generating $OPEN (bench/heightfield.py --open)" >&2
+    "$MITSUBA_VENV/bin/python" bench/heightfield.py "$OPEN" 1000000 --open || die "could not generate $OPEN"
+fi
 
 if [[ " $CASES " == *" room"* ]]; then
     mkdir -p "$ROOM_DIR" || die "could not create $ROOM_DIR"
@@ -127,6 +142,7 @@ run_mitsuba() {
         --rr-depth "$rr" --variant "$variant")
     [[ $obj == "$MESH" ]] && args+=(--cam "${MESH_CAM[@]}")
     [[ $obj == "$ROOM" ]] && args+=(--cam "${ROOM_CAM[@]}")
+    [[ $obj == "$OPEN" ]] && args+=(--cam "${OPEN_CAM[@]}")
     # Match kalos' thread count when the machine has more cores. Dr.Jit deadlocks with one
     # thread (and so when pinned to one core with its default count), so one core is two
     # Dr.Jit threads pinned to CPU 0 by taskset.
@@ -180,10 +196,12 @@ for c in $CASES; do
         cornell*) obj=cornell-box.obj scene=cornell spp=$SPP res=256 ;;
         mesh*) obj=$MESH scene=$MESH spp=$SPP_MESH res=128 ;;
         room*) obj=$ROOM scene=$ROOM spp=$SPP res=256 ;;
+        open*) obj=$OPEN scene=$OPEN spp=$SPP_OPEN res=128 ;;
     esac
     kextra=()
     [[ $c == mesh* ]] && kextra=(--camera "$(IFS=,; echo "${MESH_CAM[*]}")")
     [[ $c == room* ]] && kextra=(--camera "$(IFS=,; echo "${ROOM_CAM[*]}")")
+    [[ $c == open* ]] && kextra=(--camera "$(IFS=,; echo "${OPEN_CAM[*]}")")
     # One core: both pinned to CPU 0 with two threads each (Dr.Jit deadlocks with one), so
     # that on a loaded machine the scheduler gives both the same share of that core.
     [[ $c == *-1 ]] && threads=2 pin=1 variant=$VARIANT_1

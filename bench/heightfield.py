@@ -3,15 +3,23 @@ walls facing inwards, a downward-facing light quad under the ceiling) whose floo
 height field of about 1M triangles. Only Kd/Ke materials, so that kalos and Mitsuba
 (render_obj.py) render the same scene with the same BSDFs.
 
-Usage: python heightfield.py OUT.obj [TRIANGLES]   (needs numpy; y is up)
+With --open the field stands alone under one light (no walls, no ceiling): the open scene
+seen from above, where most paths leave the scene after a bounce or two and the camera and
+shadow rays are coherent.
+
+Usage: python heightfield.py OUT.obj [TRIANGLES] [--open]   (needs numpy; y is up)
 """
 import os
 import sys
 
 import numpy as np
 
-out = sys.argv[1]
-target = int(sys.argv[2]) if len(sys.argv) > 2 else 1_000_000
+argv = [a for a in sys.argv[1:] if a != "--open"]
+open_scene = len(argv) < len(sys.argv) - 1
+if not argv or len(argv) > 2:
+    sys.exit("heightfield.py: usage: heightfield.py OUT.obj [TRIANGLES] [--open]")
+out = argv[0]
+target = int(argv[1]) if len(argv) > 1 else 1_000_000
 n = int((target / 2) ** 0.5)  # n x n cells, 2 triangles each
 xs = np.linspace(-1.0, 1.0, n + 1)
 x, z = np.meshgrid(xs, xs, indexing="ij")
@@ -53,10 +61,15 @@ with open(out, "w") as f:
             f.write("".join(f"v {p[0]} {p[1]} {p[2]}\n" for p in q))
             f.write(f"f {nv + 1} {nv + 2} {nv + 3}\nf {nv + 1} {nv + 3} {nv + 4}\n")
             nv += 4
-    quads("wall", walls)
-    quads("light", [light])
+    if open_scene:
+        # one light above the field, larger and brighter than the closed room's: the same
+        # downward-facing quad, at 1.5 above the field's mean height
+        quads("light", [[(2 * x, 1.5, 2 * z) for x, _, z in light]])
+    else:
+        quads("wall", walls)
+        quads("light", [light])
     f.write("usemtl field\n")
     np.savetxt(f, field, fmt="f %d %d %d")
 with open(mtl, "w") as f:
     f.write("newmtl wall\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 20 20 20\nnewmtl field\nKd 0.6 0.5 0.4\n")
-print(f"wrote {out}: {len(field) + 12} triangles ({len(field)} in the height field)", file=sys.stderr)
+print(f"wrote {out}: {len(field) + (2 if open_scene else 12)} triangles ({len(field)} in the height field)", file=sys.stderr)
