@@ -175,8 +175,11 @@ run_kalos() {
     shift 7
     local pre=()
     [[ $pin == 1 ]] && pre=(taskset -c 0)
-    local args=(render "$scene" --spp "$spp" --res "${res}x${res}" --max-depth "$depth"
-        --threads "$threads" --quiet --stats "$K_STATS" -o "$K_OUT" "$@")
+    # The same work as Mitsuba's path integrator with its independent sampler: the path tracer
+    # rendered plainly (not the automatic method's pilots and filtering) with independent numbers.
+    local args=(render "$scene" --method plain --integrator path --sampler random --spp "$spp"
+        --res "${res}x${res}" --max-depth "$depth" --threads "$threads" --quiet --stats "$K_STATS"
+        -o "$K_OUT" "$@")
     [[ $rr == off ]] && args+=(--rr off)
     rm -f "$K_STATS"
     "${pre[@]}" "$KALOS" "${args[@]}" >&2 || return 1
