@@ -235,6 +235,8 @@ impl<const N: usize> Query<N> {
 /// per entry, on the query's stack frame); the large one always suffices
 /// (see `Bvh::build`).
 pub(super) const TINY_STACK: usize = 16;
+// `Bvh::trace_impl` lists its live queries by u8 index.
+const _: () = assert!(BATCH <= 256);
 pub(super) const SMALL_STACK: usize = 64;
 pub(super) const LARGE_STACK: usize = (WIDTH - 1) * 64;
 
@@ -601,20 +603,31 @@ impl Bvh {
             return;
         }
         self.prefetch(self.root);
-        let mut live = [false; BATCH];
-        live[..n].fill(true);
+        // The queries still walking, in a list from which an answered one is taken out
+        // (the last one takes its place), so that a round steps only those: the rays of
+        // a batch end at very different depths (on an open scene most leave after a few
+        // steps), and a round over every slot spent its time skipping answered ones.
+        let mut live = [0u8; BATCH];
+        for (i, l) in live[..n].iter_mut().enumerate() {
+            *l = i as u8;
+        }
         let mut left = n;
         while left > 0 {
-            for ((q, alive), a) in st.iter_mut().zip(live.iter_mut()).zip(out.iter_mut()) {
-                if *alive && self.step::<N, AVX, true>(q) {
-                    *alive = false;
-                    left -= 1;
+            let mut i = 0;
+            while i < left {
+                let j = live[i] as usize;
+                let q = &mut st[j];
+                if self.step::<N, AVX, true>(q) {
                     // Answered at once, while the hit's packet is in the cache.
-                    *a = if q.any {
+                    out[j] = if q.any {
                         RayAnswer::Occluded(q.best.0 != u32::MAX)
                     } else {
                         RayAnswer::Closest(self.closest_of(q))
                     };
+                    left -= 1;
+                    live[i] = live[left];
+                } else {
+                    i += 1;
                 }
             }
         }
