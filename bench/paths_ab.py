@@ -2,12 +2,14 @@
 """Render throughput of two kalos binaries, alternated round by round (A/B of two builds).
 
 Usage: paths_ab.py ROUNDS KALOS_A KALOS_B -- RENDER ARGS...
-  e.g. paths_ab.py 6 /tmp/kalos-old target/release/kalos -- cornell --spp 16 --res 256x256 \\
-           --rr off --max-depth 8 --threads 1
+  e.g. paths_ab.py 6 /tmp/kalos-old target/release/kalos -- cornell --method plain \\
+           --integrator path --spp 16 --res 256x256 --rr off --max-depth 8 --threads 1
 
 Each round runs both (in alternating order) and reads `paths_per_second` from `--stats`
 (render time only: scene loading and the BVH build are left out, which matters on large
-meshes); prints each round and the median of the per-round B/A ratios. Prints the CPU model
+meshes); prints each round and the median of the per-round B/A ratios. The arguments go to
+both as they are: name the work (`--method plain --integrator path --sampler random` for the
+path tracer alone; kalos' default method runs pilots and filtering). Prints the CPU model
 and its vector extensions first: a ratio holds for the CPU it ran on."""
 import json, os, statistics, subprocess, sys, tempfile
 
