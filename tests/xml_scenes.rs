@@ -425,3 +425,30 @@ fn bsdfs_outside_twosided_are_black_on_the_back() {
     // and the two estimators agree
     assert!((means[1] - means[5]).abs() < 0.03 * means[1], "{means:?}");
 }
+
+/// A living room as Blender 5.0's OBJ exporter writes it (`scenes/blender/`, made by its
+/// script with Blender as a Python module): it loads without a refusal, its Principled
+/// materials read as physically based surfaces, and the camera kalos places inside looks
+/// at the furnished side of the room (not at the window's sky panel), lit.
+#[test]
+fn a_blender_living_room_renders_from_the_view_that_shows_it() {
+    let scene = scene::load("scenes/blender/living_room.obj").unwrap();
+    let w = scene.warnings_for(false).join("\n");
+    assert!(w.contains("Principled BSDF export"), "{w}");
+    assert!(
+        scene
+            .info
+            .camera_from
+            .contains("inside the closed room, looking along -x"),
+        "{}",
+        scene.info.camera_from
+    );
+    let set = settings(&scene, 32, 24);
+    let img = render_spp(&scene, &set, 16).mean_rgb();
+    let lit = img.iter().filter(|p| p[1] > 0.02).count();
+    assert!(
+        lit > img.len() * 9 / 10,
+        "{lit} of {} pixels lit",
+        img.len()
+    );
+}

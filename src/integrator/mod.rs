@@ -226,16 +226,13 @@ impl Integrator {
             .mode
             .uses_estimate()
             .then(|| RadianceEstimate::of_scene(scene));
-        let radiosity = if set.gather.reads_solution()
-            || set.kind == IntegratorKind::Radiosity
-            || reads_radiosity_l_tilde
-        {
-            Some(Arc::new(Solution::compute(
-                scene,
-                &set.radiosity,
-                bands,
-                progress,
-            )?))
+        let gathers = set.gather.reads_solution() || set.kind == IntegratorKind::Radiosity;
+        let radiosity = if gathers || reads_radiosity_l_tilde {
+            let mut rset = set.radiosity;
+            if !gathers {
+                rset.default_elements = crate::radiosity::ROULETTE_ELEMENTS;
+            }
+            Some(Arc::new(Solution::compute(scene, &rset, bands, progress)?))
         } else {
             None
         };
@@ -557,4 +554,38 @@ pub fn camera_ray(cam: &Camera, x: u32, y: u32, s: &mut SampleStream) -> Ray {
     s.set_dimension(0);
     let p = cam.film_position(x, y, s.next_2d());
     cam.ray(p.x, p.y)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A solution that only the estimate roulette reads is meshed coarsely
+    /// (`ROULETTE_ELEMENTS`); the gather's keeps the fine default; an explicit
+    /// `--radiosity-max-area` wins over both.
+    #[test]
+    fn the_roulette_alone_reads_a_coarse_solution() {
+        let scene = crate::scene::load("cornell").unwrap();
+        let elements = |gather: Gather, max_area: Option<f32>| {
+            let mut set = IntegratorSettings {
+                gather,
+                ..Default::default()
+            };
+            set.roulette.mode = RrMode::Estimate;
+            set.roulette.estimate = RrEstimate::Radiosity;
+            set.radiosity.max_area = max_area;
+            // the mesh is what is tested: one shot solves enough
+            set.radiosity.max_shots = Some(1);
+            let i = Integrator::prepare(&scene, set, 3, &crate::progress::Silent).unwrap();
+            i.radiosity.unwrap().stats.elements
+        };
+        let coarse = elements(Gather::Off, None);
+        let fine = elements(Gather::Radiosity, None);
+        assert!((100..400).contains(&coarse), "{coarse} elements");
+        assert!(fine > 8 * coarse, "{fine} against {coarse} elements");
+        assert_eq!(
+            elements(Gather::Off, Some(0.02)),
+            elements(Gather::Radiosity, Some(0.02))
+        );
+    }
 }

@@ -385,6 +385,57 @@ fn sphere_directions(n: usize) -> Vec<Vec3> {
         .collect()
 }
 
+/// What the default camera needs of the scene's triangles to judge a view: each
+/// triangle's material and whether that material emits.
+pub struct Surfaces<'a> {
+    pub material: &'a [u32],
+    pub emits: &'a [bool],
+}
+
+/// What a candidate view sees on a 16x16 grid of pilot rays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct View {
+    /// Distinct non-emitting materials hit.
+    materials: usize,
+    /// Share of the rays that hit an emitter.
+    emitter_share: f32,
+}
+
+impl View {
+    fn describe(&self) -> String {
+        format!(
+            "{} materials, emitters {:.0}% of the frame",
+            self.materials,
+            100.0 * self.emitter_share
+        )
+    }
+}
+
+fn view_of(bvh: &Bvh, desc: &CameraDesc, s: &Surfaces) -> View {
+    const N: u32 = 16;
+    let cam = Camera::new(*desc, N, N);
+    let mut seen = std::collections::BTreeSet::new();
+    let mut emitters = 0;
+    for y in 0..N {
+        for x in 0..N {
+            let r = cam.ray(x as f32 + 0.5, y as f32 + 0.5);
+            let Some(h) = bvh.intersect(&r, f32::INFINITY) else {
+                continue;
+            };
+            let m = s.material.get(h.prim as usize).copied().unwrap_or(0);
+            if s.emits.get(m as usize).copied().unwrap_or(false) {
+                emitters += 1;
+            } else {
+                seen.insert(m);
+            }
+        }
+    }
+    View {
+        materials: seen.len(),
+        emitter_share: emitters as f32 / (N * N) as f32,
+    }
+}
+
 /// Is `to` visible from `from` (nothing in between, up to a small margin)?
 fn visible(bvh: &Bvh, from: Vec3, to: Vec3) -> bool {
     let d = to - from;
@@ -399,9 +450,12 @@ fn visible(bvh: &Bvh, from: Vec3, to: Vec3) -> bool {
 /// (`framing_camera`). When that camera would see nothing lit — every ray it casts meets
 /// the outside of a closed room whose lights are inside — the camera is placed inside:
 /// at the point of a 7x7x7 grid over the bounds that is enclosed (98% of 64 rays hit
-/// geometry), sees a light, and is farthest from any surface; it looks along the bounds'
-/// longest horizontal axis (y is up), from three quarters of the way back to the wall
-/// behind it, 60 degrees vertical. If no such point exists the framing camera stays and
+/// geometry), sees a light, and is farthest from any surface. From there it looks along
+/// the horizontal axis (y is up) whose view shows the most of the room: each of +x, -x,
+/// +z and -z, from three quarters of the way back to the wall behind, 60 degrees
+/// vertical, casts a 16x16 grid of pilot rays; the view that hits the most distinct
+/// materials wins, unless emitters fill more than a fifth of its frame (a window or a
+/// light panel seen head on), ties to the longer view. `how` says what each view saw. If no such point exists the framing camera stays and
 /// the warning says how to give one (`--camera`).
 ///
 /// `lights`: points on the emitters (triangle centroids, point lights); `environment`:
@@ -411,6 +465,7 @@ pub fn default_camera(
     bounds: &Bounds3,
     lights: &[Vec3],
     environment: bool,
+    surfaces: &Surfaces,
 ) -> DefaultCamera {
     let outside = framing_camera(bounds);
     let framing = DefaultCamera {
@@ -480,25 +535,10 @@ pub fn default_camera(
             ..framing
         };
     };
-    let axis = if ext.x >= ext.z { Vec3::X } else { Vec3::Z };
     let dist = |d: Vec3| {
         bvh.intersect(&Ray::new(p, d), f32::INFINITY)
             .map(|h| h.t)
             .unwrap_or(0.0)
-    };
-    let dir = if dist(axis) >= dist(-axis) {
-        axis
-    } else {
-        -axis
-    };
-    let origin = p - dir * 0.75 * dist(-dir);
-    let desc = CameraDesc {
-        origin: origin.into(),
-        target: (origin + dir).into(),
-        up: [0.0, 1.0, 0.0],
-        fov: 60.0,
-        fov_axis: FovAxis::Y,
-        ..Default::default()
     };
     let name = |d: Vec3| match (d.x, d.z) {
         (x, _) if x > 0.5 => "+x",
@@ -506,17 +546,53 @@ pub fn default_camera(
         (_, z) if z > 0.5 => "+z",
         _ => "-z",
     };
+    // Each horizontal direction from three quarters of the way back to the wall behind,
+    // judged by what its pilot rays see: most distinct materials (the room's contents),
+    // unless emitters fill more than a fifth of the frame (a window or lamp panel seen
+    // head on); ties go to the longer view.
+    let candidates = [Vec3::X, -Vec3::X, Vec3::Z, -Vec3::Z].map(|dir| {
+        let origin = p - dir * 0.75 * dist(-dir);
+        let desc = CameraDesc {
+            origin: origin.into(),
+            target: (origin + dir).into(),
+            up: [0.0, 1.0, 0.0],
+            fov: 60.0,
+            fov_axis: FovAxis::Y,
+            ..Default::default()
+        };
+        let view = view_of(bvh, &desc, surfaces);
+        (dir, desc, view, dist(dir))
+    });
+    let rank = |v: &View, depth: f32| (v.emitter_share <= 0.2, v.materials, depth);
+    let (dir, desc, view, _) = candidates
+        .iter()
+        .max_by(|a, b| {
+            rank(&a.2, a.3)
+                .partial_cmp(&rank(&b.2, b.3))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+        .cloned()
+        .expect("four candidates");
+    let origin = Vec3::from(desc.origin);
+    let others: Vec<String> = candidates
+        .iter()
+        .filter(|c| c.0 != dir)
+        .map(|c| format!("{} {}", name(c.0), c.2.describe()))
+        .collect();
     let how = format!(
-        "default: inside the closed room, looking along {}",
-        name(dir)
+        "default: inside the closed room, looking along {}: it sees {} (the others: {})",
+        name(dir),
+        view.describe(),
+        others.join("; ")
     );
     DefaultCamera {
         warning: Some(format!(
-            "no camera given, and the bounds enclose a closed room (the default camera outside would see only its walls): the camera is placed inside at ({:.3}, {:.3}, {:.3}) looking along {} ({}; `kalos info` prints it)",
+            "no camera given, and the bounds enclose a closed room (the default camera outside would see only its walls): the camera is placed inside at ({:.3}, {:.3}, {:.3}) looking along {}, the view that sees the most ({}; {}; `kalos info` prints it)",
             origin.x,
             origin.y,
             origin.z,
             name(dir),
+            view.describe(),
             "--camera ox,oy,oz,tx,ty,tz,ux,uy,uz,fov chooses another"
         )),
         desc,
@@ -644,5 +720,60 @@ mod tests {
             let r = c.raster(d).unwrap();
             assert!((s.raster - r).length() < 1e-3);
         }
+    }
+
+    /// A closed 6 x 3 x 4 room (x, y, z) whose +x wall is one lit panel and whose -z
+    /// side holds three boxes of their own materials: the longest axis looks at the
+    /// panel, the view that shows the room's contents looks along -z.
+    #[test]
+    fn the_interior_camera_looks_at_the_contents_not_at_a_lit_wall() {
+        let mut tris: Vec<[Vec3; 3]> = Vec::new();
+        let mut material = Vec::new();
+        let mut quad = |c: [Vec3; 4], m: u32| {
+            tris.push([c[0], c[1], c[2]]);
+            tris.push([c[0], c[2], c[3]]);
+            material.extend([m, m]);
+        };
+        let (x, y, z) = (3.0, 3.0, 2.0);
+        let v = Vec3::new;
+        // walls (material 0), the +x wall lit (material 1)
+        quad([v(-x, 0., -z), v(-x, 0., z), v(x, 0., z), v(x, 0., -z)], 0);
+        quad([v(-x, y, -z), v(x, y, -z), v(x, y, z), v(-x, y, z)], 0);
+        quad([v(-x, 0., -z), v(x, 0., -z), v(x, y, -z), v(-x, y, -z)], 0);
+        quad([v(-x, 0., z), v(-x, y, z), v(x, y, z), v(x, 0., z)], 0);
+        quad([v(-x, 0., -z), v(-x, y, -z), v(-x, y, z), v(-x, 0., z)], 0);
+        quad([v(x, 0., -z), v(x, 0., z), v(x, y, z), v(x, y, -z)], 1);
+        // three upright boards near the -z wall, materials 2, 3, 4
+        for (k, cx) in [-1.5f32, 0.0, 1.5].into_iter().enumerate() {
+            let zz = -z + 0.3;
+            quad(
+                [
+                    v(cx - 0.4, 0., zz),
+                    v(cx + 0.4, 0., zz),
+                    v(cx + 0.4, 1.2, zz),
+                    v(cx - 0.4, 1.2, zz),
+                ],
+                2 + k as u32,
+            );
+        }
+        let bvh = Bvh::build(&tris);
+        let mut bounds = Bounds3::default();
+        tris.iter().flatten().for_each(|&p| bounds.grow(p));
+        let lights: Vec<Vec3> = tris
+            .iter()
+            .zip(&material)
+            .filter(|(_, &m)| m == 1)
+            .map(|(t, _)| (t[0] + t[1] + t[2]) / 3.0)
+            .collect();
+        let emits = [false, true, false, false, false];
+        let surfaces = Surfaces {
+            material: &material,
+            emits: &emits,
+        };
+        let d = default_camera(&bvh, &bounds, &lights, false, &surfaces);
+        let dir = Vec3::from(d.desc.target) - Vec3::from(d.desc.origin);
+        assert!(dir.z < -0.9, "looks along {dir}: {}", d.how);
+        assert!(d.how.contains("-z") && d.how.contains("+x"), "{}", d.how);
+        assert!(d.warning.unwrap().contains("the view that sees the most"));
     }
 }

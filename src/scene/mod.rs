@@ -463,18 +463,30 @@ impl Scene {
         let (camera, camera_how) = match desc.camera {
             Some(c) => (c, "scene file".to_string()),
             None => {
+                let emits: Vec<bool> = desc
+                    .materials
+                    .iter()
+                    .map(|m| m.ke != [0.0; 3] || m.emit_one_minus_albedo)
+                    .collect();
                 let mut lights: Vec<Vec3> = desc
                     .positions
                     .iter()
                     .zip(&desc.material)
-                    .filter(|(_, &m)| {
-                        let m = &desc.materials[m as usize];
-                        m.ke != [0.0; 3] || m.emit_one_minus_albedo
-                    })
+                    .filter(|(_, &m)| emits[m as usize])
                     .map(|(t, _)| (t[0] + t[1] + t[2]) / 3.0)
                     .collect();
                 lights.extend(desc.point_lights.iter().map(|l| l.position));
-                let d = camera::default_camera(&bvh, &bounds, &lights, desc.environment.is_some());
+                let surfaces = camera::Surfaces {
+                    material: &desc.material,
+                    emits: &emits,
+                };
+                let d = camera::default_camera(
+                    &bvh,
+                    &bounds,
+                    &lights,
+                    desc.environment.is_some(),
+                    &surfaces,
+                );
                 camera_warning = d.warning.map(|w| format!("scene {}: {w}", desc.name));
                 (d.desc, d.how)
             }
