@@ -288,6 +288,7 @@ fn gold_of(dist: Distribution, alpha: f32) -> Bsdf {
         specular: [1.0; 3],
         alpha,
         dist,
+        aniso: None,
     })
 }
 
@@ -500,6 +501,7 @@ fn microfacet_white_furnace() {
             specular: [1.0; 3],
             alpha,
             dist,
+            aniso: None,
         })
     };
     let white_metal = |alpha| white_metal_of(GGX, alpha);
@@ -532,6 +534,7 @@ fn microfacet_white_furnace() {
                 specular: [1.0; 3],
                 alpha: 0.3,
                 dist: GGX,
+                aniso: None,
             }),
             Some(0.0),
         ),
