@@ -78,3 +78,7 @@ impl Roughness {
         Bsdf::Conductor(c)
     }
 }
+
+#[cfg(test)]
+#[path = "roughness_tests.rs"]
+mod tests;

@@ -78,3 +78,85 @@ impl<'a> Loader<'a> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn conductor(alphas: &str) -> Result<SceneDesc, String> {
+        parse(
+            &format!(
+                "<scene version=\"3.0.0\">\n<shape type=\"rectangle\"><bsdf type=\"roughconductor\">\n{alphas}\n</bsdf></shape>\n</scene>"
+            ),
+            "r.xml",
+            Path::new("."),
+        )
+    }
+
+    #[test]
+    fn anisotropic_and_textured_roughness_is_read_and_not_warned() {
+        let d = conductor(
+            r#"<float name="alpha_u" value="0.25"/><float name="alpha_v" value="0.05"/>"#,
+        )
+        .unwrap();
+        assert_eq!(
+            d.materials[0].roughness,
+            Some(Roughness {
+                alpha_u: Alpha::Value(0.25),
+                alpha_v: Alpha::Value(0.05)
+            })
+        );
+        assert!(d.warnings.iter().all(|w| !w.contains("anisotropic")), "{:?}", d.warnings);
+        // equal constants: the one isotropic alpha, nothing per hit
+        let d = conductor(
+            r#"<float name="alpha_u" value="0.2"/><float name="alpha_v" value="0.2"/>"#,
+        )
+        .unwrap();
+        assert_eq!(d.materials[0].roughness, None);
+        // a checkerboard, read as Mitsuba's eval_1 reads it (color0 where the checks of u
+        // and v differ)
+        let d = conductor(
+            r#"<texture name="alpha_u" type="checkerboard">
+                <float name="color0" value="0.05"/><float name="color1" value="0.3"/></texture>
+               <float name="alpha_v" value="0.1"/>"#,
+        )
+        .unwrap();
+        let Some(Roughness {
+            alpha_u: Alpha::Map(t),
+            alpha_v: Alpha::Value(v),
+        }) = &d.materials[0].roughness
+        else {
+            panic!("{:?}", d.materials[0].roughness)
+        };
+        assert_eq!(*v, 0.1);
+        // Mitsuba's uv (0.25, 0.25) is kalos' (0.25, 0.75): both checks below 1/2
+        assert_eq!(t.lookup(0.25, 0.75)[0], 0.3);
+        assert_eq!(t.lookup(0.75, 0.75)[0], 0.05);
+    }
+
+    #[test]
+    fn bad_roughness_is_one_line_naming_the_place() {
+        for (alphas, needle) in [
+            (
+                r#"<float name="alpha_u" value="0.2"/><float name="alpha_v" value="x"/>"#,
+                "r.xml:3: <float name=\"alpha_v\" value=\"x\">: not a number",
+            ),
+            (
+                r#"<float name="alpha_u" value="0.2"/><float name="alpha_v" value="-1"/>"#,
+                "must be in [0, 10]",
+            ),
+            (
+                r#"<texture name="alpha_u" type="checkerboard"><float name="color0" value="20"/></texture><float name="alpha_v" value="0.1"/>"#,
+                "must be in [0, 10]",
+            ),
+            (
+                r#"<texture name="alpha_u" type="bitmap"><string name="filename" value="no-such.png"/></texture><float name="alpha_v" value="0.1"/>"#,
+                "no-such.png",
+            ),
+        ] {
+            let e = conductor(alphas).unwrap_err();
+            assert!(e.contains(needle) && !e.contains('\n'), "{alphas}: {e}");
+        }
+    }
+}
