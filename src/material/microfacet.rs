@@ -347,7 +347,14 @@ mod tests {
         // integral of D(m) cos theta_m dm = 1 and integral of D_v(m) dm = 1 (midpoint rule
         // over the hemisphere in (cos theta, phi)).
         for (dist, alpha) in BOTH.into_iter().flat_map(|d| {
-            [(0.05f32, 0.05), (0.3, 0.3), (0.8, 0.8), (0.25, 0.05), (0.1, 0.6)].map(|a| (d, a))
+            [
+                (0.05f32, 0.05),
+                (0.3, 0.3),
+                (0.8, 0.8),
+                (0.25, 0.05),
+                (0.1, 0.6),
+            ]
+            .map(|a| (d, a))
         }) {
             let g = Microfacet::anisotropic(dist, alpha.0, alpha.1);
             let v = Vec3::new(0.6, 0.2, 0.5).normalize();
@@ -383,7 +390,14 @@ mod tests {
         // isotropic, and anisotropic seen at an azimuth off both axes (lobes no sharper
         // than the grid of the test resolves)
         let cases = BOTH.into_iter().flat_map(|d| {
-            [(0.2f32, 0.2), (0.5, 0.5), (1.0, 1.0), (0.6, 0.2), (0.2, 0.8)].map(|a| (d, a))
+            [
+                (0.2f32, 0.2),
+                (0.5, 0.5),
+                (1.0, 1.0),
+                (0.6, 0.2),
+                (0.2, 0.8),
+            ]
+            .map(|a| (d, a))
         });
         for (k, (dist, alpha)) in cases.enumerate() {
             let g = Microfacet::anisotropic(dist, alpha.0, alpha.1);

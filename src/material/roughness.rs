@@ -69,7 +69,10 @@ impl Roughness {
             return bsdf;
         };
         let (au, av) = self.at(uv);
-        let (au, av) = (au.max(super::microfacet::MIN_ALPHA), av.max(super::microfacet::MIN_ALPHA));
+        let (au, av) = (
+            au.max(super::microfacet::MIN_ALPHA),
+            av.max(super::microfacet::MIN_ALPHA),
+        );
         c.alpha = au;
         c.aniso = (au != av).then(|| Anisotropy {
             alpha_v: av,

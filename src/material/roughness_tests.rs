@@ -63,7 +63,10 @@ fn anisotropic_sample_weight_is_f_cos_over_pdf() {
                 };
                 let f = b.eval::<3>(wo, s.wi)[0] * s.wi.z;
                 assert!((s.pdf - b.pdf(wo, s.wi)).abs() <= 1e-3 * s.pdf, "{dist:?}");
-                assert!((s.weight[0] - f / s.pdf).abs() <= 1e-3 * s.weight[0], "{dist:?}");
+                assert!(
+                    (s.weight[0] - f / s.pdf).abs() <= 1e-3 * s.weight[0],
+                    "{dist:?}"
+                );
             }
         }
     }
@@ -74,11 +77,18 @@ fn anisotropic_white_furnace() {
     // F = 1: what is lost is shadowing alone; nearly nothing for small roughness along
     // both axes, never more than everything
     for dist in DISTS {
-        for (au, av, exact) in [(0.02f32, 0.01f32, true), (0.5, 0.05, false), (0.1, 0.9, false)] {
+        for (au, av, exact) in [
+            (0.02f32, 0.01f32, true),
+            (0.5, 0.05, false),
+            (0.1, 0.9, false),
+        ] {
             let b = white(dist, au, av, 0.3);
             for deg in [0.0f32, 30.0, 60.0, 85.0] {
                 let (a, se) = crate::material::tests::energy(&b, dir(deg, 1.0), 100_000, 17);
-                assert!(a <= 1.0 + 4.0 * se + 1e-4, "{dist:?} ({au}, {av}) at {deg}: {a}");
+                assert!(
+                    a <= 1.0 + 4.0 * se + 1e-4,
+                    "{dist:?} ({au}, {av}) at {deg}: {a}"
+                );
                 if exact && deg < 80.0 {
                     assert!((a - 1.0).abs() < 2e-3 + 4.0 * se, "{dist:?} at {deg}: {a}");
                 }
@@ -137,16 +147,24 @@ fn roughness_applies_per_hit() {
     match at(0.1, 0.9) {
         Bsdf::Conductor(c) => {
             assert_eq!(c.alpha, 0.3);
-            assert_eq!(c.aniso.map(|a| (a.alpha_v, a.tangent)), Some((0.05, [0.0, 1.0])));
+            assert_eq!(
+                c.aniso.map(|a| (a.alpha_v, a.tangent)),
+                Some((0.05, [0.0, 1.0]))
+            );
         }
         b => panic!("{b:?}"),
     }
     // where both are 0.05 the conductor is isotropic, and the tangent is never asked
-    let b = r.apply(iso, crate::math::Vec2::new(0.3, 0.9), || panic!("not asked"));
+    let b = r.apply(iso, crate::math::Vec2::new(0.3, 0.9), || {
+        panic!("not asked")
+    });
     match b {
         Bsdf::Conductor(c) => assert_eq!((c.alpha, c.aniso), (0.05, None)),
         b => panic!("{b:?}"),
     }
     // other BSDFs pass unchanged
-    assert_eq!(r.apply(Bsdf::Black, crate::math::Vec2::ZERO, || [1.0, 0.0]), Bsdf::Black);
+    assert_eq!(
+        r.apply(Bsdf::Black, crate::math::Vec2::ZERO, || [1.0, 0.0]),
+        Bsdf::Black
+    );
 }

@@ -74,7 +74,9 @@ impl<'a> Loader<'a> {
         if (0.0..=10.0).contains(&a) {
             Ok(a)
         } else {
-            Err(format!("{at}: roughconductor {name} {a}: must be in [0, 10]"))
+            Err(format!(
+                "{at}: roughconductor {name} {a}: must be in [0, 10]"
+            ))
         }
     }
 }
@@ -107,12 +109,15 @@ mod tests {
                 alpha_v: Alpha::Value(0.05)
             })
         );
-        assert!(d.warnings.iter().all(|w| !w.contains("anisotropic")), "{:?}", d.warnings);
+        assert!(
+            d.warnings.iter().all(|w| !w.contains("anisotropic")),
+            "{:?}",
+            d.warnings
+        );
         // equal constants: the one isotropic alpha, nothing per hit
-        let d = conductor(
-            r#"<float name="alpha_u" value="0.2"/><float name="alpha_v" value="0.2"/>"#,
-        )
-        .unwrap();
+        let d =
+            conductor(r#"<float name="alpha_u" value="0.2"/><float name="alpha_v" value="0.2"/>"#)
+                .unwrap();
         assert_eq!(d.materials[0].roughness, None);
         // a checkerboard, read as Mitsuba's eval_1 reads it (color0 where the checks of u
         // and v differ)
