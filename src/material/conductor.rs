@@ -47,14 +47,14 @@ pub struct Anisotropy {
 impl Anisotropy {
     /// A local direction in the tangent's frame (x along the tangent).
     #[inline]
-    fn to_tangent(&self, v: Vec3) -> Vec3 {
+    fn in_tangent_frame(&self, v: Vec3) -> Vec3 {
         let [c, s] = self.tangent;
         Vec3::new(c * v.x + s * v.y, c * v.y - s * v.x, v.z)
     }
 
-    /// The inverse of [`Anisotropy::to_tangent`].
+    /// The inverse of [`Anisotropy::in_tangent_frame`].
     #[inline]
-    fn from_tangent(&self, v: Vec3) -> Vec3 {
+    fn in_local_frame(&self, v: Vec3) -> Vec3 {
         let [c, s] = self.tangent;
         Vec3::new(c * v.x - s * v.y, s * v.x + c * v.y, v.z)
     }
@@ -119,7 +119,7 @@ impl Conductor {
             return Spectrum::ZERO;
         }
         if let Some((g, a)) = self.aniso_mf() {
-            return self.eval_in(&g, a.to_tangent(wo), a.to_tangent(wi));
+            return self.eval_in(&g, a.in_tangent_frame(wo), a.in_tangent_frame(wi));
         }
         self.eval_in(&self.mf(), wo, wi)
     }
@@ -141,7 +141,7 @@ impl Conductor {
             return 0.0;
         }
         match self.aniso_mf() {
-            Some((g, a)) => Self::pdf_in(&g, a.to_tangent(wo), a.to_tangent(wi)),
+            Some((g, a)) => Self::pdf_in(&g, a.in_tangent_frame(wo), a.in_tangent_frame(wi)),
             None => Self::pdf_in(&self.mf(), wo, wi),
         }
     }
@@ -159,8 +159,8 @@ impl Conductor {
         }
         let wi = match self.aniso_mf() {
             Some((g, a)) => {
-                let wo = a.to_tangent(wo);
-                a.from_tangent(reflect(wo, g.sample_visible(wo, u)))
+                let wo = a.in_tangent_frame(wo);
+                a.in_local_frame(reflect(wo, g.sample_visible(wo, u)))
             }
             None => reflect(wo, self.mf().sample_visible(wo, u)),
         };
@@ -182,8 +182,8 @@ impl Conductor {
         }
         match self.aniso_mf() {
             Some((g, a)) => {
-                let mut s = self.sample_in(&g, a.to_tangent(wo), u)?;
-                s.wi = a.from_tangent(s.wi);
+                let mut s = self.sample_in(&g, a.in_tangent_frame(wo), u)?;
+                s.wi = a.in_local_frame(s.wi);
                 Some(s)
             }
             None => self.sample_in(&self.mf(), wo, u),
