@@ -9,6 +9,12 @@
 //! sampled by drawing a visible normal m from D_wo and reflecting wo about it; then
 //!   p(wi) = D_wo(h) / (4 wo.h) = D(h) G1(wo, h) / (4 cos theta_o),
 //!   f cos theta_i / p = specular F(wo.h) G1(wi, h).
+//!
+//! Anisotropic (Mitsuba's alpha_u != alpha_v): alpha along the surface's tangent (dp/du
+//! made orthogonal to the shading normal, as Mitsuba's shading frame), alpha_v along the
+//! bitangent. The tangent's direction in the local frame the integrators build
+//! (`Anisotropy::tangent`) is set per hit by the scene; directions are turned about the
+//! normal into the tangent's frame and the microfacet model is evaluated there.
 
 use super::microfacet::{reflect, Distribution, Microfacet};
 use super::BsdfSample;
@@ -22,9 +28,36 @@ pub struct Conductor {
     /// Imaginary part (absorption), per RGB channel.
     pub k: [f32; 3],
     pub specular: [f32; 3],
-    /// Microfacet roughness; 0: the smooth conductor.
+    /// Microfacet roughness (alpha_u when anisotropic); 0: the smooth conductor.
     pub alpha: f32,
     pub dist: Distribution,
+    /// None: isotropic roughness `alpha`.
+    pub aniso: Option<Anisotropy>,
+}
+
+/// The second roughness of an anisotropic conductor and the frame it applies in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Anisotropy {
+    /// Roughness along the bitangent.
+    pub alpha_v: f32,
+    /// (cos, sin) of the tangent's angle to the local frame's x axis (its s vector).
+    pub tangent: [f32; 2],
+}
+
+impl Anisotropy {
+    /// A local direction in the tangent's frame (x along the tangent).
+    #[inline]
+    fn in_tangent_frame(&self, v: Vec3) -> Vec3 {
+        let [c, s] = self.tangent;
+        Vec3::new(c * v.x + s * v.y, c * v.y - s * v.x, v.z)
+    }
+
+    /// The inverse of [`Anisotropy::in_tangent_frame`].
+    #[inline]
+    fn in_local_frame(&self, v: Vec3) -> Vec3 {
+        let [c, s] = self.tangent;
+        Vec3::new(c * v.x - s * v.y, s * v.x + c * v.y, v.z)
+    }
 }
 
 /// Unpolarised Fresnel reflectance of a conductor of index eta + i k at incidence cosine
@@ -66,6 +99,13 @@ impl Conductor {
         Microfacet::new(self.dist, self.alpha)
     }
 
+    /// The anisotropic conductor's microfacet model and frame (None when isotropic).
+    #[inline]
+    fn aniso_mf(&self) -> Option<(Microfacet, Anisotropy)> {
+        let a = self.aniso?;
+        Some((Microfacet::anisotropic(self.dist, self.alpha, a.alpha_v), a))
+    }
+
     /// specular F(cos) per RGB channel.
     #[inline]
     pub fn reflectance(&self, cos: f32) -> [f32; 3] {
@@ -78,8 +118,16 @@ impl Conductor {
         if self.is_smooth() || wo.z <= 0.0 || wi.z <= 0.0 {
             return Spectrum::ZERO;
         }
+        if let Some((g, a)) = self.aniso_mf() {
+            return self.eval_in(&g, a.in_tangent_frame(wo), a.in_tangent_frame(wi));
+        }
+        self.eval_in(&self.mf(), wo, wi)
+    }
+
+    /// f(wo, wi) with microfacet model `g` (directions in its frame, above the surface).
+    #[inline(always)]
+    fn eval_in<const N: usize>(&self, g: &Microfacet, wo: Vec3, wi: Vec3) -> Spectrum<N> {
         let h = (wo + wi).normalize();
-        let g = self.mf();
         let dg = g.d(h) * g.g(wo, wi, h);
         if dg <= 0.0 {
             return Spectrum::ZERO;
@@ -92,8 +140,15 @@ impl Conductor {
         if self.is_smooth() || wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
+        match self.aniso_mf() {
+            Some((g, a)) => Self::pdf_in(&g, a.in_tangent_frame(wo), a.in_tangent_frame(wi)),
+            None => Self::pdf_in(&self.mf(), wo, wi),
+        }
+    }
+
+    #[inline(always)]
+    fn pdf_in(g: &Microfacet, wo: Vec3, wi: Vec3) -> f32 {
         let h = (wo + wi).normalize();
-        let g = self.mf();
         g.d(h) * g.g1(wo, h) / (4.0 * wo.z)
     }
 
@@ -102,8 +157,13 @@ impl Conductor {
         if self.is_smooth() || wo.z <= 0.0 {
             return None;
         }
-        let m = self.mf().sample_visible(wo, u);
-        let wi = reflect(wo, m);
+        let wi = match self.aniso_mf() {
+            Some((g, a)) => {
+                let wo = a.in_tangent_frame(wo);
+                a.in_local_frame(reflect(wo, g.sample_visible(wo, u)))
+            }
+            None => reflect(wo, self.mf().sample_visible(wo, u)),
+        };
         (wi.z > 0.0).then_some(wi)
     }
 
@@ -120,7 +180,23 @@ impl Conductor {
                 delta: true,
             });
         }
-        let g = self.mf();
+        match self.aniso_mf() {
+            Some((g, a)) => {
+                let mut s = self.sample_in(&g, a.in_tangent_frame(wo), u)?;
+                s.wi = a.in_local_frame(s.wi);
+                Some(s)
+            }
+            None => self.sample_in(&self.mf(), wo, u),
+        }
+    }
+
+    #[inline(always)]
+    fn sample_in<const N: usize>(
+        &self,
+        g: &Microfacet,
+        wo: Vec3,
+        u: Vec2,
+    ) -> Option<BsdfSample<N>> {
         let m = g.sample_visible(wo, u);
         let wi = reflect(wo, m);
         if wi.z <= 0.0 {

@@ -1,19 +1,23 @@
-//! The microfacet distributions of Mitsuba's rough plugins, isotropic roughness alpha:
-//! GGX (Trowbridge-Reitz) and Beckmann, each with Smith's separable shadowing-masking
+//! The microfacet distributions of Mitsuba's rough plugins, of roughness alpha_u along
+//! the local x axis (the tangent) and alpha_v along y (isotropic: both alpha): GGX
+//! (Trowbridge-Reitz) and Beckmann, each with Smith's separable shadowing-masking
 //! G(wo, wi, m) = G1(wo, m) G1(wi, m) (the form Mitsuba 3 uses) and exact sampling of the
 //! normals visible from a direction.
 //!
 //! Symbols: m the microfacet normal, theta_m its angle to the macro normal (+z), v a
-//! direction, a = 1 / (alpha tan theta_v).
+//! direction, a = 1 / (alpha_v' tan theta_v), where alpha_v'^2 = (alpha_u^2 v_x^2 +
+//! alpha_v^2 v_y^2) / (v_x^2 + v_y^2) is the roughness seen along v's azimuth (alpha when
+//! isotropic).
 //!
 //! GGX (Walter et al. 2007; Heitz, "Sampling the GGX distribution of visible normals",
 //! JCGT 2018):
-//!   D(m)      = 1 / (pi alpha^2 (m_x^2 / alpha^2 + m_y^2 / alpha^2 + m_z^2)^2),
+//!   D(m)      = 1 / (pi alpha_u alpha_v (m_x^2 / alpha_u^2 + m_y^2 / alpha_v^2 + m_z^2)^2),
 //!   Lambda(v) = (-1 + sqrt(1 + 1 / a^2)) / 2.
 //!
 //! Beckmann (Walter et al. 2007, eq. 25 and 27; Heitz and d'Eon, "Importance sampling
 //! microfacet-based BSDFs using the distribution of visible normals", EGSR 2014):
-//!   D(m)      = exp(-tan^2 theta_m / alpha^2) / (pi alpha^2 cos^4 theta_m),
+//!   D(m)      = exp(-(m_x^2 / alpha_u^2 + m_y^2 / alpha_v^2) / m_z^2)
+//!               / (pi alpha_u alpha_v cos^4 theta_m),
 //!   Lambda(v) = (erf(a) - 1) / 2 + exp(-a^2) / (2 a sqrt(pi))   (exact Smith;
 //!               Mitsuba uses a rational fit of 1 / (1 + Lambda) within 0.35% of it).
 //!
@@ -23,14 +27,18 @@
 //!               visible from v, which `sample_visible` draws exactly.
 //!
 //! Visible normals are drawn in the stretched configuration (alpha = 1, the view
-//! v' = (alpha v_x, alpha v_y, v_z) / |..|). GGX: Heitz's projected-disk construction.
+//! v' = (alpha_u v_x, alpha_v v_y, v_z) / |..|) and unstretched by (alpha_u, alpha_v), as
+//! Mitsuba's `MicrofacetDistribution::sample` with `sample_visible`. GGX: Heitz's projected-disk construction.
 //! Beckmann: in slope space (x~, y~) = (-m_x / m_z, -m_y / m_z) the visible slopes seen
 //! from v' at angle theta (azimuth 0) have the density
 //!   (1 - x~ tan theta)^+ exp(-x~^2 - y~^2) / (pi C(cot theta)),
 //!   C(x) = (1 + erf(x)) / 2 + tan theta exp(-x^2) / (2 sqrt(pi))   (the CDF of x~; C(cot theta) = 1 + Lambda),
 //! so y~ ~ N(0, 1/2) on its own and x~ solves C(x~) = u C(cot theta) (Newton's method
-//! kept inside a bisection bracket); the slopes are turned by v's azimuth, scaled by alpha
-//! and made a normal.
+//! kept inside a bisection bracket); the slopes are turned by v's azimuth, scaled by
+//! (alpha_u, alpha_v) and made a normal.
+//!
+//! The isotropic case keeps its own expressions of D and G1 (one comparison chooses),
+//! so that its values do not change by a rounding.
 
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -68,7 +76,10 @@ impl Distribution {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Microfacet {
     pub dist: Distribution,
+    /// Roughness along the local x axis (alpha_u; the isotropic alpha).
     pub alpha: f32,
+    /// Roughness along the local y axis (alpha_v; equal to `alpha` when isotropic).
+    pub alpha_v: f32,
 }
 
 const INV_SQRT_PI: f64 = 0.564_189_583_547_756_3;
@@ -76,10 +87,27 @@ const INV_SQRT_PI: f64 = 0.564_189_583_547_756_3;
 impl Microfacet {
     #[inline]
     pub fn new(dist: Distribution, alpha: f32) -> Microfacet {
+        let alpha = alpha.max(MIN_ALPHA);
         Microfacet {
             dist,
-            alpha: alpha.max(MIN_ALPHA),
+            alpha,
+            alpha_v: alpha,
         }
+    }
+
+    /// Roughness `alpha_u` along the local x axis, `alpha_v` along y.
+    #[inline]
+    pub fn anisotropic(dist: Distribution, alpha_u: f32, alpha_v: f32) -> Microfacet {
+        Microfacet {
+            dist,
+            alpha: alpha_u.max(MIN_ALPHA),
+            alpha_v: alpha_v.max(MIN_ALPHA),
+        }
+    }
+
+    #[inline(always)]
+    fn is_isotropic(&self) -> bool {
+        self.alpha == self.alpha_v
     }
 
     /// D(m), per unit solid angle of m (projected: integral of D(m) cos theta_m = 1).
@@ -88,16 +116,31 @@ impl Microfacet {
         if m.z <= 0.0 {
             return 0.0;
         }
-        let a2 = self.alpha * self.alpha;
-        let d = match self.dist {
-            Distribution::Ggx => {
-                let t = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
-                1.0 / (PI * a2 * t * t)
+        let d = if self.is_isotropic() {
+            let a2 = self.alpha * self.alpha;
+            match self.dist {
+                Distribution::Ggx => {
+                    let t = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
+                    1.0 / (PI * a2 * t * t)
+                }
+                Distribution::Beckmann => {
+                    let c2 = m.z * m.z;
+                    let tan2 = (m.x * m.x + m.y * m.y) / c2;
+                    (-tan2 / a2).exp() / (PI * a2 * c2 * c2)
+                }
             }
-            Distribution::Beckmann => {
-                let c2 = m.z * m.z;
-                let tan2 = (m.x * m.x + m.y * m.y) / c2;
-                (-tan2 / a2).exp() / (PI * a2 * c2 * c2)
+        } else {
+            let (x, y) = (m.x / self.alpha, m.y / self.alpha_v);
+            let auv = self.alpha * self.alpha_v;
+            match self.dist {
+                Distribution::Ggx => {
+                    let t = x * x + y * y + m.z * m.z;
+                    1.0 / (PI * auv * t * t)
+                }
+                Distribution::Beckmann => {
+                    let c2 = m.z * m.z;
+                    (-(x * x + y * y) / c2).exp() / (PI * auv * c2 * c2)
+                }
             }
         };
         // as Mitsuba: drop values that underflow with the cosine
@@ -114,7 +157,12 @@ impl Microfacet {
         if v.dot(m) * v.z <= 0.0 {
             return 0.0;
         }
-        let xy2 = self.alpha * self.alpha * (v.x * v.x + v.y * v.y);
+        let xy2 = if self.is_isotropic() {
+            self.alpha * self.alpha * (v.x * v.x + v.y * v.y)
+        } else {
+            let (x, y) = (self.alpha * v.x, self.alpha_v * v.y);
+            x * x + y * y
+        };
         if xy2 == 0.0 {
             return 1.0;
         }
@@ -155,9 +203,9 @@ impl Microfacet {
 
     /// Heitz 2018, listing 1.
     fn sample_visible_ggx(&self, v: Vec3, u: Vec2) -> Vec3 {
-        let a = self.alpha;
+        let (au, av) = (self.alpha, self.alpha_v);
         // 1. the view direction in the hemisphere configuration (stretched to alpha = 1)
-        let vh = Vec3::new(a * v.x, a * v.y, v.z).normalize();
+        let vh = Vec3::new(au * v.x, av * v.y, v.z).normalize();
         // 2. an orthonormal basis (T1, T2, vh)
         let len2 = vh.x * vh.x + vh.y * vh.y;
         let t1 = if len2 > 0.0 {
@@ -176,15 +224,15 @@ impl Microfacet {
         // 4. reprojected onto the hemisphere
         let nh = t1 * p1 + t2 * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
         // 5. back to the ellipsoid configuration
-        Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-7)).normalize()
+        Vec3::new(au * nh.x, av * nh.y, nh.z.max(1e-7)).normalize()
     }
 
     /// Heitz and d'Eon 2014 (see the module's notes): slopes in the stretched
     /// configuration, in f64.
     fn sample_visible_beckmann(&self, v: Vec3, u: Vec2) -> Vec3 {
-        let a = self.alpha as f64;
-        // 1. stretch: v' = (alpha v_x, alpha v_y, v_z) / |..|, its angle and azimuth
-        let (sx, sy, sz) = (a * v.x as f64, a * v.y as f64, v.z as f64);
+        let (au, av) = (self.alpha as f64, self.alpha_v as f64);
+        // 1. stretch: v' = (alpha_u v_x, alpha_v v_y, v_z) / |..|, its angle and azimuth
+        let (sx, sy, sz) = (au * v.x as f64, av * v.y as f64, v.z as f64);
         let sin_t = (sx * sx + sy * sy).sqrt();
         let (cos_phi, sin_phi) = if sin_t > 0.0 {
             (sx / sin_t, sy / sin_t)
@@ -196,8 +244,8 @@ impl Microfacet {
         // 2. the slopes seen from v' at azimuth 0
         let (x, y) = beckmann_visible_slopes(tan_t, u.x as f64, u.y as f64);
         // 3. turned by the azimuth, 4. unstretched
-        let xr = (cos_phi * x - sin_phi * y) * a;
-        let yr = (sin_phi * x + cos_phi * y) * a;
+        let xr = (cos_phi * x - sin_phi * y) * au;
+        let yr = (sin_phi * x + cos_phi * y) * av;
         // 5. the normal of slopes (x~, y~)
         Vec3::new(-xr as f32, -yr as f32, 1.0).normalize()
     }
@@ -298,11 +346,17 @@ mod tests {
     fn d_is_normalised_and_visible_normals_integrate_to_one() {
         // integral of D(m) cos theta_m dm = 1 and integral of D_v(m) dm = 1 (midpoint rule
         // over the hemisphere in (cos theta, phi)).
-        for (dist, alpha) in BOTH
-            .into_iter()
-            .flat_map(|d| [(d, 0.05f32), (d, 0.3), (d, 0.8)])
-        {
-            let g = Microfacet::new(dist, alpha);
+        for (dist, alpha) in BOTH.into_iter().flat_map(|d| {
+            [
+                (0.05f32, 0.05),
+                (0.3, 0.3),
+                (0.8, 0.8),
+                (0.25, 0.05),
+                (0.1, 0.6),
+            ]
+            .map(|a| (d, a))
+        }) {
+            let g = Microfacet::anisotropic(dist, alpha.0, alpha.1);
             let v = Vec3::new(0.6, 0.2, 0.5).normalize();
             let (n_t, n_p) = (4000, 64);
             let (mut s1, mut s2) = (0.0f64, 0.0f64);
@@ -322,25 +376,35 @@ mod tests {
             }
             assert!(
                 (s1 - 1.0).abs() < 2e-3,
-                "{dist:?} alpha {alpha}: int D cos = {s1}"
+                "{dist:?} alpha {alpha:?}: int D cos = {s1}"
             );
             assert!(
                 (s2 - 1.0).abs() < 2e-3,
-                "{dist:?} alpha {alpha}: int D_v = {s2}"
+                "{dist:?} alpha {alpha:?}: int D_v = {s2}"
             );
         }
     }
 
     #[test]
     fn chi2_visible_normals() {
-        let cases = BOTH
-            .into_iter()
-            .flat_map(|d| [(d, 0.2f32), (d, 0.5), (d, 1.0)]);
+        // isotropic, and anisotropic seen at an azimuth off both axes (lobes no sharper
+        // than the grid of the test resolves)
+        let cases = BOTH.into_iter().flat_map(|d| {
+            [
+                (0.2f32, 0.2),
+                (0.5, 0.5),
+                (1.0, 1.0),
+                (0.6, 0.2),
+                (0.2, 0.8),
+            ]
+            .map(|a| (d, a))
+        });
         for (k, (dist, alpha)) in cases.enumerate() {
-            let g = Microfacet::new(dist, alpha);
+            let g = Microfacet::anisotropic(dist, alpha.0, alpha.1);
+            let phi = if alpha.0 == alpha.1 { 0.0f32 } else { 0.6 };
             for (j, deg) in [0.0f32, 45.0, 80.0].into_iter().enumerate() {
                 let t = deg.to_radians();
-                let v = Vec3::new(t.sin(), 0.0, t.cos());
+                let v = Vec3::new(t.sin() * phi.cos(), t.sin() * phi.sin(), t.cos());
                 let r = chi2_sphere(
                     |_, u| Some(g.sample_visible(v, u)),
                     |m| g.pdf_visible(v, m),
@@ -348,7 +412,7 @@ mod tests {
                     500 + (k * 10 + j) as u64,
                 );
                 assert_chi2(
-                    &format!("{dist:?} visible normals alpha {alpha} at {deg}"),
+                    &format!("{dist:?} visible normals alpha {alpha:?} at {deg}"),
                     &r,
                 );
             }

@@ -22,6 +22,7 @@ pub mod mirror;
 pub mod phong;
 pub mod plastic;
 pub mod rough_dielectric;
+pub mod roughness;
 mod surface;
 pub mod thin_dielectric;
 pub use surface::Material;

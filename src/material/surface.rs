@@ -23,6 +23,8 @@ pub struct Material {
     pub opacity_texture: Option<u32>,
     /// The shading normal from a texture (Mitsuba's `normalmap`, `bumpmap`).
     pub normal_map: Option<crate::texture::normal::NormalMap>,
+    /// A rough conductor's roughness per hit (anisotropic or textured; see `roughness`).
+    pub roughness: Option<super::roughness::Roughness>,
 }
 
 impl Material {

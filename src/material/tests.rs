@@ -288,6 +288,7 @@ fn gold_of(dist: Distribution, alpha: f32) -> Bsdf {
         specular: [1.0; 3],
         alpha,
         dist,
+        aniso: None,
     })
 }
 
@@ -476,7 +477,7 @@ fn microfacet_sampling_agrees_with_uniform_sampling() {
 
 /// Mean and standard error of the energy a sample carries: its weight, with the
 /// radiance scaling of refraction undone (importance), over `n` samples.
-fn energy(b: &Bsdf, wo: Vec3, n: usize, seed: u64) -> (f64, f64) {
+pub(super) fn energy(b: &Bsdf, wo: Vec3, n: usize, seed: u64) -> (f64, f64) {
     let mut rng = TestRng::new(seed);
     let (mut s, mut s2) = (0.0f64, 0.0f64);
     for _ in 0..n {
@@ -500,6 +501,7 @@ fn microfacet_white_furnace() {
             specular: [1.0; 3],
             alpha,
             dist,
+            aniso: None,
         })
     };
     let white_metal = |alpha| white_metal_of(GGX, alpha);
@@ -532,6 +534,7 @@ fn microfacet_white_furnace() {
                 specular: [1.0; 3],
                 alpha: 0.3,
                 dist: GGX,
+                aniso: None,
             }),
             Some(0.0),
         ),

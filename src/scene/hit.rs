@@ -177,13 +177,46 @@ impl Scene {
         let Some(map) = &self.material_of(prim).normal_map else {
             return ns;
         };
+        let (dp_du, dp_dv) = self.dp_duv(prim, ng);
+        map.perturb(uv, ng, ns, dp_du, dp_dv)
+    }
+
+    /// dp/du and dp/dv of triangle `prim` in Mitsuba's uv, or, without texture coordinates
+    /// (or with degenerate ones), the pair Mitsuba's `coordinate_system` builds around the
+    /// geometric normal `ng`.
+    fn dp_duv(&self, prim: u32, ng: Vec3) -> (Vec3, Vec3) {
         let i = prim as usize;
         let tangents = self
             .uvs
             .get(i)
             .and_then(|uvs| crate::texture::normal::tangents(&self.tris[i], uvs));
-        let (dp_du, dp_dv) = tangents.unwrap_or_else(|| ng.any_orthonormal_pair());
-        map.perturb(uv, ng, ns, dp_du, dp_dv)
+        tangents.unwrap_or_else(|| ng.any_orthonormal_pair())
+    }
+
+    /// `bsdf` with roughness `r` at `hit` seen from `wo`: an anisotropic one turned to the
+    /// tangent of Mitsuba's shading frame (dp/du made orthogonal to the shading normal),
+    /// given in the local frame [`Shading`] builds for `wo`. (Out of line: materials
+    /// without such roughness never call it.)
+    #[inline(never)]
+    pub(super) fn rough_bsdf(
+        &self,
+        r: &crate::material::roughness::Roughness,
+        bsdf: crate::material::Bsdf,
+        hit: &SurfaceHit,
+        wo: Vec3,
+    ) -> crate::material::Bsdf {
+        r.apply(bsdf, hit.uv, || {
+            let frame = hit.shading(wo, bsdf.is_two_sided()).frame;
+            let dp_du = self.dp_duv(hit.prim, hit.ng).0;
+            let t = dp_du - frame.n * frame.n.dot(dp_du);
+            let (c, s) = (t.dot(frame.s), t.dot(frame.t));
+            let len = (c * c + s * s).sqrt();
+            if len > 0.0 && len.is_finite() {
+                [c / len, s / len]
+            } else {
+                [1.0, 0.0]
+            }
+        })
     }
 
     /// The surface information of a BVH hit.

@@ -45,6 +45,9 @@ pub struct MaterialDesc {
     pub kd_procedural: Option<Arc<Texture>>,
     /// A shading normal from a texture (Mitsuba's `normalmap` and `bumpmap`).
     pub normal_map: Option<texture_normal::NormalMap>,
+    /// A rough conductor's anisotropic or textured roughness (Mitsuba's `alpha_u`,
+    /// `alpha_v`); None: the model's one `alpha`.
+    pub roughness: Option<crate::material::roughness::Roughness>,
     /// The share of light the surface stops (Mitsuba's `mask`, MTL's `d`); the rest
     /// passes straight through, as if the surface were not there (a cut-out).
     pub opacity: f32,
@@ -185,6 +188,7 @@ impl MaterialDesc {
             kd_sampling: texture::Sampling::default(),
             kd_procedural: None,
             normal_map: None,
+            roughness: None,
             opacity: 1.0,
             map_opacity: None,
             emit_one_minus_albedo: false,
@@ -393,6 +397,7 @@ impl Scene {
                 opacity: m.opacity.min(1.0),
                 opacity_texture,
                 normal_map: m.normal_map.clone(),
+                roughness: m.roughness.clone(),
             });
         }
         let cutouts = materials.iter().any(Material::is_cutout);
@@ -570,17 +575,22 @@ impl Scene {
     }
 
     /// The BSDF of material `mat` at a hit seen from direction `wo`: its Kd from its texture
-    /// at `hit`'s uv; black on the back of a one-sided material.
+    /// at `hit`'s uv, its roughness there (`Material::roughness`); black on the back of a
+    /// one-sided material.
     #[inline]
     pub fn bsdf_at(&self, mat: &Material, hit: &SurfaceHit, wo: Vec3) -> crate::material::Bsdf {
         if mat.one_sided && wo.dot(hit.ng) <= 0.0 {
             return crate::material::Bsdf::Black;
         }
-        match mat.kd_texture {
+        let bsdf = match mat.kd_texture {
             Some(t) => mat
                 .bsdf
                 .with_kd(self.textures[t as usize].lookup(hit.uv.x, hit.uv.y)),
             None => mat.bsdf,
+        };
+        match &mat.roughness {
+            None => bsdf,
+            Some(r) => self.rough_bsdf(r, bsdf, hit, wo),
         }
     }
 }
@@ -613,6 +623,7 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
                 specular,
                 alpha,
                 dist: distribution,
+                aniso: None,
             })
         }
         SurfaceModel::Plastic {

@@ -72,7 +72,8 @@ impl<'a> Loader<'a> {
             }
             (Some(a), None, None) => a,
             (None, Some(u), Some(v)) => {
-                if u != v {
+                // (a rough conductor renders it: `conductor_roughness`)
+                if u != v && plugin != "roughconductor" {
                     self.warn(
                         "anisotropic",
                         format!(
@@ -232,6 +233,9 @@ impl<'a> Loader<'a> {
                     alpha: if kind == "conductor" { 0.0 } else { alpha },
                     distribution,
                 });
+                if kind == "roughconductor" {
+                    m.roughness = self.conductor_roughness(el)?;
+                }
             }
             "plastic" | "roughplastic" => {
                 let (alpha, distribution) = if kind == "roughplastic" {

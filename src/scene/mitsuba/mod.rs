@@ -49,6 +49,7 @@ mod bsdf;
 mod emitter;
 mod properties;
 mod reader;
+mod roughness;
 mod sensor;
 mod shape;
 mod spectra;
