@@ -64,9 +64,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
         "conductor spheres under the museum envmap: about 2% of pixel-channels off",
     ),
     ("test_instancing_path", "shapegroup / instance not read: no shapes"),
-    ("test_mesh_attributes_1_face_direct", "mesh_attribute texture and blendbsdf not read"),
-    ("test_mesh_attributes_3_face_direct", "mesh_attribute texture (face colours) not read"),
-    ("test_mesh_attributes_3_vertex_direct", "mesh_attribute texture (vertex colours) not read"),
     (
         "test_various_emitters_ptracer",
         "about 1% of pixel-channels off with the projector read (the particle tracer is rendered by the path tracer); not yet measured",

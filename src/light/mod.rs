@@ -525,6 +525,7 @@ mod tests {
             opacity: 1.0,
             opacity_texture: None,
             normal_map: None,
+            varying: None,
         }
     }
 

@@ -14,6 +14,7 @@
 //! subpaths with `Bsdf::adjoint_scale`.
 
 pub mod albedo;
+pub mod blend;
 pub mod conductor;
 pub mod dielectric;
 pub mod lambert;
@@ -24,9 +25,11 @@ pub mod plastic;
 pub mod rough_dielectric;
 mod surface;
 pub mod thin_dielectric;
+pub mod varying;
 pub use surface::Material;
 
 pub use albedo::AlbedoTable;
+pub use blend::Blend;
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use lambert::Lambert;
@@ -135,6 +138,8 @@ pub enum Bsdf {
     RoughDielectric(RoughDielectric),
     /// Thin dielectric slab (Dirac reflection and straight transmission).
     ThinDielectric(ThinDielectric),
+    /// Mitsuba's `blendbsdf`: two BSDFs blended by a weight.
+    Blend(Blend),
 }
 
 /// Luminance of an RGB triple (lobe selection weights).
@@ -181,7 +186,11 @@ impl Bsdf {
     /// slab is symmetric, so it is).
     #[inline]
     pub fn is_two_sided(&self) -> bool {
-        !matches!(self, Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_))
+        match self {
+            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) => false,
+            Bsdf::Blend(b) => b.pair.iter().all(Bsdf::is_two_sided),
+            _ => true,
+        }
     }
 
     /// Only Dirac lobes: next-event estimation is useless here.
@@ -190,6 +199,7 @@ impl Bsdf {
         match self {
             Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Black | Bsdf::ThinDielectric(_) => true,
             Bsdf::Conductor(c) => c.is_smooth(),
+            Bsdf::Blend(b) => b.pair.iter().all(Bsdf::is_delta),
             _ => false,
         }
     }
@@ -199,7 +209,11 @@ impl Bsdf {
     /// try them.
     #[inline]
     pub fn transmits(&self) -> bool {
-        matches!(self, Bsdf::RoughDielectric(_))
+        match self {
+            Bsdf::RoughDielectric(_) => true,
+            Bsdf::Blend(b) => b.pair.iter().any(Bsdf::transmits),
+            _ => false,
+        }
     }
 
     /// The factor that turns a sampled weight f(wo, wi) |cos theta_i| / p, which carries
@@ -211,6 +225,12 @@ impl Bsdf {
         let eta = match self {
             Bsdf::Dielectric(d) => d.eta,
             Bsdf::RoughDielectric(d) => d.eta,
+            // the first of the two that refracts (a blend of two refracting interfaces of
+            // different indices is scaled as the first)
+            Bsdf::Blend(b) => {
+                let s = b.pair.iter().map(|x| x.adjoint_scale(wo, wi));
+                return s.into_iter().find(|&s| s != 1.0).unwrap_or(1.0);
+            }
             _ => return 1.0,
         };
         if wo.z * wi.z >= 0.0 {
@@ -245,6 +265,7 @@ impl Bsdf {
             Bsdf::Conductor(c) => c.eval(wo, wi),
             Bsdf::Plastic(p) => p.eval(wo, wi),
             Bsdf::RoughDielectric(d) => d.eval(wo, wi),
+            Bsdf::Blend(b) => b.eval(wo, wi),
             _ => Spectrum::ZERO,
         }
     }
@@ -273,6 +294,7 @@ impl Bsdf {
             Bsdf::Conductor(c) => c.pdf(wo, wi),
             Bsdf::Plastic(p) => p.pdf(wo, wi),
             Bsdf::RoughDielectric(d) => d.pdf(wo, wi),
+            Bsdf::Blend(b) => b.pdf(wo, wi),
             _ => 0.0,
         }
     }
@@ -309,6 +331,7 @@ impl Bsdf {
             Bsdf::Plastic(p) => p.sample(wo, u_lobe, u),
             Bsdf::RoughDielectric(d) => d.sample(wo, u_lobe, u),
             Bsdf::ThinDielectric(d) => d.sample(wo, u_lobe),
+            Bsdf::Blend(b) => b.sample(wo, u_lobe, u),
         }
     }
 
@@ -326,6 +349,7 @@ impl Bsdf {
                 Spectrum::from_rgb(p.base_albedo_rgb()) + Spectrum::from_rgb(p.coat_albedo_rgb())
             }
             Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => Spectrum::ONE,
+            Bsdf::Blend(b) => b.albedo(),
         }
     }
 }

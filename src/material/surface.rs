@@ -23,6 +23,9 @@ pub struct Material {
     pub opacity_texture: Option<u32>,
     /// The shading normal from a texture (Mitsuba's `normalmap`, `bumpmap`).
     pub normal_map: Option<crate::texture::normal::NormalMap>,
+    /// Parameters that vary over the surface beyond `kd_texture` (the BSDF at a hit is
+    /// made from them; see `Scene::bsdf_at`).
+    pub varying: Option<std::sync::Arc<super::varying::Varying>>,
 }
 
 impl Material {

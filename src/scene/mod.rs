@@ -5,6 +5,7 @@
 pub mod builtin;
 pub mod camera;
 pub mod hit;
+pub mod mesh_attr;
 pub mod mitsuba;
 pub mod mtl;
 pub mod obj;
@@ -12,6 +13,7 @@ pub mod ply;
 
 pub mod toml_scene;
 pub mod tri_attr;
+mod varying;
 
 pub use crate::texture::Texture;
 use crate::texture::{self, normal as texture_normal};
@@ -45,6 +47,9 @@ pub struct MaterialDesc {
     pub kd_procedural: Option<Arc<Texture>>,
     /// A shading normal from a texture (Mitsuba's `normalmap` and `bumpmap`).
     pub normal_map: Option<texture_normal::NormalMap>,
+    /// The diffuse reflectance from a mesh attribute (Mitsuba's `mesh_attribute`), used
+    /// instead of `kd`.
+    pub kd_attribute: Option<texture::mesh_attribute::MeshAttribute>,
     /// The share of light the surface stops (Mitsuba's `mask`, MTL's `d`); the rest
     /// passes straight through, as if the surface were not there (a cut-out).
     pub opacity: f32,
@@ -101,6 +106,11 @@ pub enum SurfaceModel {
     },
     /// `thindielectric`: a thin slab of index `eta` (no refraction of the direction).
     ThinDielectric { eta: f32, tint: Tint },
+    /// `blendbsdf`: (1 - weight) times the first plus weight times the second.
+    Blend {
+        weight: texture::mesh_attribute::Param,
+        bsdfs: Box<[MaterialDesc; 2]>,
+    },
 }
 
 impl SurfaceModel {
@@ -114,6 +124,7 @@ impl SurfaceModel {
             SurfaceModel::Dielectric { alpha, .. } if *alpha > 0.0 => "roughdielectric",
             SurfaceModel::Dielectric { .. } => "dielectric",
             SurfaceModel::ThinDielectric { .. } => "thindielectric",
+            SurfaceModel::Blend { .. } => "blendbsdf",
         }
     }
 }
@@ -185,6 +196,7 @@ impl MaterialDesc {
             kd_sampling: texture::Sampling::default(),
             kd_procedural: None,
             normal_map: None,
+            kd_attribute: None,
             opacity: 1.0,
             map_opacity: None,
             emit_one_minus_albedo: false,
@@ -228,6 +240,8 @@ pub struct SceneDesc {
     /// in single precision).
     pub skipped_nonfinite: usize,
     pub warnings: Vec<String>,
+    /// Mesh attributes (Mitsuba's `vertex_*`, `face_*`) of the triangles that have them.
+    pub attributes: Vec<mesh_attr::AttributeDesc>,
 }
 
 impl SceneDesc {
@@ -300,6 +314,8 @@ pub struct Scene {
     pub uvs: tri_attr::TriAttr<[Vec2; 3]>,
     pub tri_material: Vec<u32>,
     pub materials: Vec<Material>,
+    /// Mesh attributes (none: nothing stored), read by materials that vary with them.
+    pub attributes: mesh_attr::Attributes,
     pub textures: Vec<Texture>,
     pub bvh: Bvh,
     pub lights: Lights,
@@ -328,6 +344,7 @@ impl Scene {
         let mut tex_paths: Vec<TexKey> = Vec::new();
         let mut materials = Vec::with_capacity(desc.materials.len());
         let mut material_warnings: Vec<String> = Vec::new();
+        let attributes = mesh_attr::Attributes::new(&desc.attributes, desc.positions.len());
         for m in &desc.materials {
             let kd_texture = match (&m.kd_procedural, &m.map_kd) {
                 (Some(t), _) => {
@@ -377,6 +394,8 @@ impl Scene {
                     .map_err(|e| format!("{} ({}): {e}", m.described(), model.plugin()))?,
                 None => Bsdf::from_mtl(kd, ks, m.ns, m.ni, m.illum),
             };
+            let varying = varying::varying_of(m, &attributes)
+                .map_err(|e| format!("{}: {e}", m.described()))?;
             let (emission, emission_table) = if m.emit_one_minus_albedo {
                 let t = AlbedoTable::new(&bsdf);
                 (t.hemispherical(true), Some(Arc::new(t)))
@@ -393,6 +412,7 @@ impl Scene {
                 opacity: m.opacity.min(1.0),
                 opacity_texture,
                 normal_map: m.normal_map.clone(),
+                varying,
             });
         }
         let cutouts = materials.iter().any(Material::is_cutout);
@@ -529,6 +549,7 @@ impl Scene {
             uvs: tri_attr::TriAttr::from_options(desc.uvs),
             tri_material: desc.material,
             materials,
+            attributes,
             textures,
             bvh,
             lights,
@@ -563,6 +584,10 @@ impl Scene {
     pub fn bsdf_at(&self, mat: &Material, hit: &SurfaceHit, wo: Vec3) -> crate::material::Bsdf {
         if mat.one_sided && wo.dot(hit.ng) <= 0.0 {
             return crate::material::Bsdf::Black;
+        }
+        if let Some(v) = &mat.varying {
+            let attr = |slot| self.attributes.eval(slot, hit.prim, hit.b1, hit.b2);
+            return v.bsdf(mat.bsdf, hit.uv.x, hit.uv.y, &attr);
         }
         match mat.kd_texture {
             Some(t) => mat
@@ -675,6 +700,10 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             }
             Bsdf::ThinDielectric(ThinDielectric { eta, tint })
         }
+        SurfaceModel::Blend {
+            ref weight,
+            ref bsdfs,
+        } => varying::blend_bsdf(weight, bsdfs)?,
     })
 }
 

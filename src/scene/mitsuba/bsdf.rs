@@ -109,6 +109,10 @@ impl<'a> Loader<'a> {
                 m.kd = [1.0; 3];
                 m.kd_procedural = Some(std::sync::Arc::new(t));
             }
+            Some(Color::Attribute(a)) => {
+                m.kd = [1.0; 3];
+                m.kd_attribute = Some(a);
+            }
         }
     }
 
@@ -318,7 +322,7 @@ impl<'a> Loader<'a> {
                             Some(Color::Bitmap(p, sampling)) => {
                                 inner_m.map_opacity = Some((p, sampling, OpacityFrom::Luminance));
                             }
-                            Some(c @ Color::Procedural(_)) => {
+                            Some(c @ (Color::Procedural(_) | Color::Attribute(_))) => {
                                 self.warn(
                                     "mask procedural",
                                     format!("{}: a checkerboard as mask opacity is not supported: rendered with its mean", el.at),
@@ -342,7 +346,8 @@ impl<'a> Loader<'a> {
                 self.unused(el, &format!("bsdf '{kind}'"));
                 return Ok(inner_m);
             }
-            "blendbsdf" | "mixturebsdf" => {
+            "blendbsdf" => return self.blend(el, name),
+            "mixturebsdf" => {
                 let inner = nested()?;
                 self.mark_all(el);
                 self.warn(

@@ -52,6 +52,7 @@ mod reader;
 mod sensor;
 mod shape;
 mod spectra;
+mod varying;
 #[cfg(test)]
 mod tests;
 
