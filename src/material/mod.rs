@@ -22,6 +22,7 @@ pub mod microfacet;
 pub mod mirror;
 pub mod phong;
 pub mod plastic;
+pub mod principled;
 pub mod rough_dielectric;
 mod surface;
 pub mod thin_dielectric;
@@ -37,6 +38,7 @@ pub use microfacet::Distribution;
 pub use mirror::Mirror;
 pub use phong::Phong;
 pub use plastic::Plastic;
+pub use principled::Principled;
 pub use rough_dielectric::RoughDielectric;
 pub use thin_dielectric::ThinDielectric;
 
@@ -140,6 +142,8 @@ pub enum Bsdf {
     ThinDielectric(ThinDielectric),
     /// Mitsuba's `blendbsdf`: two BSDFs blended by a weight.
     Blend(Blend),
+    /// Mitsuba's `principled` (Burley's BSDF).
+    Principled(Principled),
 }
 
 /// Luminance of an RGB triple (lobe selection weights).
@@ -187,7 +191,7 @@ impl Bsdf {
     #[inline]
     pub fn is_two_sided(&self) -> bool {
         match self {
-            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) => false,
+            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::Principled(_) => false,
             Bsdf::Blend(b) => b.pair.iter().all(Bsdf::is_two_sided),
             _ => true,
         }
@@ -211,6 +215,7 @@ impl Bsdf {
     pub fn transmits(&self) -> bool {
         match self {
             Bsdf::RoughDielectric(_) => true,
+            Bsdf::Principled(p) => p.transmits(),
             Bsdf::Blend(b) => b.pair.iter().any(Bsdf::transmits),
             _ => false,
         }
@@ -225,6 +230,7 @@ impl Bsdf {
         let eta = match self {
             Bsdf::Dielectric(d) => d.eta,
             Bsdf::RoughDielectric(d) => d.eta,
+            Bsdf::Principled(p) => p.eta,
             // the first of the two that refracts (a blend of two refracting interfaces of
             // different indices is scaled as the first)
             Bsdf::Blend(b) => {
@@ -266,6 +272,7 @@ impl Bsdf {
             Bsdf::Plastic(p) => p.eval(wo, wi),
             Bsdf::RoughDielectric(d) => d.eval(wo, wi),
             Bsdf::Blend(b) => b.eval(wo, wi),
+            Bsdf::Principled(p) => p.eval(wo, wi),
             _ => Spectrum::ZERO,
         }
     }
@@ -295,6 +302,7 @@ impl Bsdf {
             Bsdf::Plastic(p) => p.pdf(wo, wi),
             Bsdf::RoughDielectric(d) => d.pdf(wo, wi),
             Bsdf::Blend(b) => b.pdf(wo, wi),
+            Bsdf::Principled(p) => p.pdf(wo, wi),
             _ => 0.0,
         }
     }
@@ -332,6 +340,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(d) => d.sample(wo, u_lobe, u),
             Bsdf::ThinDielectric(d) => d.sample(wo, u_lobe),
             Bsdf::Blend(b) => b.sample(wo, u_lobe, u),
+            Bsdf::Principled(p) => p.sample(wo, u_lobe, u),
         }
     }
 
@@ -350,6 +359,7 @@ impl Bsdf {
             }
             Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => Spectrum::ONE,
             Bsdf::Blend(b) => b.albedo(),
+            Bsdf::Principled(p) => Spectrum::from_rgb(p.albedo_rgb()),
         }
     }
 }

@@ -106,6 +106,8 @@ pub enum SurfaceModel {
     },
     /// `thindielectric`: a thin slab of index `eta` (no refraction of the direction).
     ThinDielectric { eta: f32, tint: Tint },
+    /// `principled`: Burley's BSDF as Mitsuba has it.
+    Principled(Box<crate::material::varying::PrincipledParams>),
     /// `blendbsdf`: (1 - weight) times the first plus weight times the second.
     Blend {
         weight: texture::mesh_attribute::Param,
@@ -125,6 +127,7 @@ impl SurfaceModel {
             SurfaceModel::Dielectric { .. } => "dielectric",
             SurfaceModel::ThinDielectric { .. } => "thindielectric",
             SurfaceModel::Blend { .. } => "blendbsdf",
+            SurfaceModel::Principled(_) => "principled",
         }
     }
 }
@@ -704,6 +707,7 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             ref weight,
             ref bsdfs,
         } => varying::blend_bsdf(weight, bsdfs)?,
+        SurfaceModel::Principled(ref p) => varying::principled_bsdf(p)?,
     })
 }
 

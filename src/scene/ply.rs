@@ -520,6 +520,36 @@ mod tests {
         }
     }
 
+    /// Properties beyond positions, normals and uvs group into Mitsuba's attributes:
+    /// `color_0..2` per vertex is `vertex_color`, `weight_0` per face `face_weight`,
+    /// `red green blue` (8-bit: normalized, sRGB-decoded) `face_color`; a face's values
+    /// go to each of its triangles.
+    #[test]
+    fn vertex_and_face_properties_are_attributes() {
+        let ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float color_0\nproperty float color_1\nproperty float color_2\nelement face 2\nproperty list uchar int vertex_indices\nproperty float weight_0\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n0 0 0 0.1 0.2 0.3\n1 0 0 0.4 0.5 0.6\n1 1 0 0.7 0.8 0.9\n0 1 0 1 1 1\n4 0 1 2 3 0.25 255 0 128\n3 0 1 2 0.75 0 0 0\n";
+        let m = parse_ply(ply.as_bytes(), "a.ply").unwrap();
+        assert_eq!(m.triangles.len(), 3);
+        let names: Vec<&str> = m.attributes.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(names, ["vertex_color", "face_color", "face_weight"]);
+        let c = &m.attributes[0];
+        assert!(!c.per_face);
+        assert_eq!(c.values[1], [0.4, 0.5, 0.6]);
+        let w = &m.attributes[2];
+        assert!(w.per_face);
+        assert_eq!(w.values, vec![[0.25; 3], [0.25; 3], [0.75; 3]]);
+        let mid = crate::image_io::srgb_decode(128.0 / 255.0);
+        assert_eq!(m.attributes[1].values[0], [1.0, 0.0, mid]);
+        // Mitsuba's postfix schemes, and groups of 2 or 4 are not attributes
+        let g = attribute_groups(
+            "vertex_",
+            &["x", "nx", "foo_x", "foo_y", "foo_z", "bar_r", "bar_g", "bar_b", "w_1", "uv_0", "uv_1", "q"],
+        );
+        let names: Vec<&str> = g.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["vertex_foo", "vertex_bar_color", "vertex_w"]);
+        // a mesh without such properties has none
+        assert!(parse_ply(ASCII.as_bytes(), "q.ply").unwrap().attributes.is_empty());
+    }
+
     #[test]
     fn bad_files_give_one_line_errors() {
         let b = binary(false);

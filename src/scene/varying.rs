@@ -3,7 +3,7 @@
 
 use super::mesh_attr::Attributes;
 use super::{bsdf_of_model, MaterialDesc, SurfaceModel};
-use crate::material::varying::Varying;
+use crate::material::varying::{PrincipledParams, Varying};
 use crate::material::{Blend, Bsdf};
 use crate::texture::mesh_attribute::{luminance, Param};
 use std::sync::Arc;
@@ -37,6 +37,9 @@ pub(super) fn varying_of(m: &MaterialDesc, attrs: &Attributes) -> Result<Option<
         (Some(SurfaceModel::Blend { weight, .. }), _) if !weight.is_const() => {
             Varying::BlendWeight(resolve(weight, attrs)?)
         }
+        (Some(SurfaceModel::Principled(p)), _) if !p.is_const() => {
+            Varying::Principled(Box::new(p.try_map(|x| resolve(x, attrs))?))
+        }
         (_, Some(a)) => Varying::Kd(resolve(&Param::Attribute(a.clone()), attrs)?),
         _ => return Ok(None),
     };
@@ -60,4 +63,15 @@ pub(super) fn blend_bsdf(weight: &Param, bsdfs: &[MaterialDesc; 2]) -> Result<Bs
         return Err(format!("weight {w}: must be a number in [0, 1]"));
     }
     Ok(Bsdf::Blend(Blend::new(Blend::intern(pair), w)))
+}
+
+/// A `principled` material with its textures' means (varying ones are looked up per hit).
+pub(super) fn principled_bsdf(p: &PrincipledParams) -> Result<Bsdf, String> {
+    if !(p.eta.is_finite() && p.eta > 0.0) {
+        return Err(format!("eta {}: must be a positive number", p.eta));
+    }
+    if !p.rates.iter().all(|r| r.is_finite() && *r >= 0.0) {
+        return Err("sampling rates must be finite and non-negative".into());
+    }
+    Ok(Bsdf::Principled(p.mean()))
 }

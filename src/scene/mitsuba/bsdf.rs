@@ -365,7 +365,8 @@ impl<'a> Loader<'a> {
                     return Ok(im);
                 }
             }
-            "principled" | "principledthin" => {
+            "principled" => self.principled(el, &mut m)?,
+            "principledthin" => {
                 let c = self.color(el, "base_color", Use::Reflectance)?;
                 self.set_diffuse(&mut m, c, 0.5);
                 self.mark_all(el);
