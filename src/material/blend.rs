@@ -81,7 +81,11 @@ impl Blend {
         let (chosen, p_sel, u_lobe) = if u_lobe <= w && w > 0.0 {
             (&self.pair[1], w, (u_lobe / w).min(1.0 - f32::EPSILON))
         } else {
-            (&self.pair[0], 1.0 - w, ((u_lobe - w) / (1.0 - w)).clamp(0.0, 1.0 - f32::EPSILON))
+            (
+                &self.pair[0],
+                1.0 - w,
+                ((u_lobe - w) / (1.0 - w)).clamp(0.0, 1.0 - f32::EPSILON),
+            )
         };
         let s = chosen.sample::<N>(wo, u_lobe, u)?;
         if s.delta {
@@ -137,7 +141,10 @@ mod tests {
     #[test]
     fn eval_and_pdf_blend_the_two() {
         let pair = Blend::intern([diffuse([0.0, 0.5, 0.5]), gold(0.2)]);
-        assert!(std::ptr::eq(pair, Blend::intern([diffuse([0.0, 0.5, 0.5]), gold(0.2)])));
+        assert!(std::ptr::eq(
+            pair,
+            Blend::intern([diffuse([0.0, 0.5, 0.5]), gold(0.2)])
+        ));
         let (o, i) = (wo(30.0), Vec3::new(-0.3, 0.2, 0.9).normalize());
         for w in [0.0f32, 0.25, 1.0] {
             let b = Blend::new(pair, w);
@@ -153,7 +160,10 @@ mod tests {
         assert_eq!(Blend::new(pair, 1.7).weight, 1.0);
         assert_eq!(Blend::new(pair, -0.2).weight, 0.0);
         // Mitsuba's test scene: diffuse (0, .5, .5) and (1, 1, 0) at weight 0.3
-        let two = Blend::new(Blend::intern([diffuse([0.0, 0.5, 0.5]), diffuse([1.0, 1.0, 0.0])]), 0.3);
+        let two = Blend::new(
+            Blend::intern([diffuse([0.0, 0.5, 0.5]), diffuse([1.0, 1.0, 0.0])]),
+            0.3,
+        );
         let f = two.eval::<3>(o, i);
         let pi = std::f32::consts::PI;
         for (c, kd) in [0.3f32, 0.65, 0.35].into_iter().enumerate() {
@@ -166,7 +176,11 @@ mod tests {
     #[test]
     fn chi2_blend_sampling() {
         let cases = [
-            ("diffuse + rough gold", [diffuse([0.8, 0.5, 0.2]), gold(0.3)], 0.4f32),
+            (
+                "diffuse + rough gold",
+                [diffuse([0.8, 0.5, 0.2]), gold(0.3)],
+                0.4f32,
+            ),
             ("smooth gold + diffuse", [gold(0.0), diffuse([0.5; 3])], 0.7),
             ("rough gold + rough gold", [gold(0.1), gold(0.6)], 0.5),
         ];
@@ -191,7 +205,10 @@ mod tests {
                     }
                     let expect = b.eval::<3>(o, s.wi) * (s.wi.z / b.pdf(o, s.wi));
                     for c in 0..3 {
-                        assert!((s.weight[c] - expect[c]).abs() <= 1e-4 * expect[c].max(1.0), "{name}");
+                        assert!(
+                            (s.weight[c] - expect[c]).abs() <= 1e-4 * expect[c].max(1.0),
+                            "{name}"
+                        );
                     }
                 }
             }

@@ -95,7 +95,9 @@ pub fn calc_schlick(r0: f32, cos_i: f32, eta: f32) -> f32 {
     } else {
         (1.0 / eta, eta)
     };
-    let cos_t = (1.0 - (1.0 - cos_i * cos_i) * eta_ti * eta_ti).max(0.0).sqrt();
+    let cos_t = (1.0 - (1.0 - cos_i * cos_i) * eta_ti * eta_ti)
+        .max(0.0)
+        .sqrt();
     let w = if eta_it > 1.0 {
         schlick_weight(cos_i.abs())
     } else {
@@ -116,7 +118,12 @@ pub fn schlick_r0(eta: f32) -> f32 {
 #[inline]
 pub fn compatible(m: Vec3, wi: Vec3, wo: Vec3, cos_i: f32, reflection: bool) -> bool {
     let m = if cos_i < 0.0 { -m } else { m };
-    wi.dot(m) > 0.0 && if reflection { wo.dot(m) > 0.0 } else { wo.dot(-m) > 0.0 }
+    wi.dot(m) > 0.0
+        && if reflection {
+            wo.dot(m) > 0.0
+        } else {
+            wo.dot(-m) > 0.0
+        }
 }
 
 /// The GTR1 distribution of the clearcoat (isotropic, alpha).
@@ -316,7 +323,11 @@ impl Principled {
                 let fd = schlick_weight(cos_d.abs());
                 let t = tint(base);
                 let c = t.map(|t| 1.0 + (t - 1.0) * self.sheen_tint);
-                add(&mut v, c, self.sheen * (1.0 - self.metallic) * fd * cos_o.abs());
+                add(
+                    &mut v,
+                    c,
+                    self.sheen * (1.0 - self.metallic) * fd * cos_o.abs(),
+                );
             }
         }
         v
@@ -328,7 +339,11 @@ impl Principled {
         if !front {
             return [bsdf * f; 3];
         }
-        let eta_it = if cos_h >= 0.0 { self.eta } else { 1.0 / self.eta };
+        let eta_it = if cos_h >= 0.0 {
+            self.eta
+        } else {
+            1.0 / self.eta
+        };
         let (m, st) = (self.metallic, self.specular_tint);
         let t = tint(base);
         let r0 = schlick_r0(eta_it);
@@ -390,7 +405,12 @@ impl Principled {
     }
 
     /// Sample a direction as Mitsuba does (kalos' directions).
-    pub fn sample<const N: usize>(&self, wo_k: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample<N>> {
+    pub fn sample<const N: usize>(
+        &self,
+        wo_k: Vec3,
+        u_lobe: f32,
+        u: Vec2,
+    ) -> Option<BsdfSample<N>> {
         let wi = wo_k;
         let cos_i = wi.z;
         if cos_i == 0.0 {

@@ -97,7 +97,10 @@ fn chi2_principled_sampling() {
     let mut rng = TestRng::new(11);
     for (k, b) in cases().into_iter().enumerate() {
         let bsdf = Bsdf::Principled(b);
-        for (j, (deg, inside)) in [(10.0f32, false), (60.0, false), (35.0, true)].into_iter().enumerate() {
+        for (j, (deg, inside)) in [(10.0f32, false), (60.0, false), (35.0, true)]
+            .into_iter()
+            .enumerate()
+        {
             if inside && !b.transmits() {
                 continue;
             }
@@ -118,7 +121,8 @@ fn chi2_principled_sampling() {
                 for c in 0..3 {
                     assert!(
                         (s.weight[c] - expect[c]).abs() <= 1e-3 * expect[c].max(1.0),
-                        "case {k}: {:?} vs {expect:?}", s.weight
+                        "case {k}: {:?} vs {expect:?}",
+                        s.weight
                     );
                 }
             }

@@ -119,7 +119,10 @@ mod tests {
         };
         d.push_attributes(&[colours, weight], 1, [0, 2, 1], 0);
         let a = Attributes::new(&d.attributes, 2);
-        let (c, w) = (a.slot("vertex_color").unwrap(), a.slot("face_weight").unwrap());
+        let (c, w) = (
+            a.slot("vertex_color").unwrap(),
+            a.slot("face_weight").unwrap(),
+        );
         // corners in the triangle's order: v0 red, v1 blue (vertex 2), v2 green
         let v = a.eval(c, 1, 0.25, 0.5);
         assert_eq!(v, [0.25, 0.5, 0.25]);

@@ -98,8 +98,26 @@ fn attribute_value(p: &Property) -> Option<f32> {
 /// when they are 1 or 3. Returns each attribute's name and its properties' names.
 pub fn attribute_groups(kind: &str, props: &[&str]) -> Vec<(String, Vec<String>)> {
     const RESERVED: [&str; 20] = [
-        "x", "y", "z", "nx", "ny", "nz", "u", "v", "s", "t", "texture_u", "texture_v",
-        "texture_s", "texture_t", "vertex_indices", "vertex_index", "r", "g", "b", "a",
+        "x",
+        "y",
+        "z",
+        "nx",
+        "ny",
+        "nz",
+        "u",
+        "v",
+        "s",
+        "t",
+        "texture_u",
+        "texture_v",
+        "texture_s",
+        "texture_t",
+        "vertex_indices",
+        "vertex_index",
+        "r",
+        "g",
+        "b",
+        "a",
     ];
     const POSTFIX: [&str; 4] = ["xr01", "yg12", "zb23", "wa34"];
     let mut out = Vec::new();
@@ -542,12 +560,18 @@ mod tests {
         // Mitsuba's postfix schemes, and groups of 2 or 4 are not attributes
         let g = attribute_groups(
             "vertex_",
-            &["x", "nx", "foo_x", "foo_y", "foo_z", "bar_r", "bar_g", "bar_b", "w_1", "uv_0", "uv_1", "q"],
+            &[
+                "x", "nx", "foo_x", "foo_y", "foo_z", "bar_r", "bar_g", "bar_b", "w_1", "uv_0",
+                "uv_1", "q",
+            ],
         );
         let names: Vec<&str> = g.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(names, ["vertex_foo", "vertex_bar_color", "vertex_w"]);
         // a mesh without such properties has none
-        assert!(parse_ply(ASCII.as_bytes(), "q.ply").unwrap().attributes.is_empty());
+        assert!(parse_ply(ASCII.as_bytes(), "q.ply")
+            .unwrap()
+            .attributes
+            .is_empty());
     }
 
     #[test]

@@ -32,7 +32,10 @@ fn resolve(p: &Param, attrs: &Attributes) -> Result<Param, String> {
 }
 
 /// What of material `m` varies over its surface beyond `kd_texture` (None: nothing).
-pub(super) fn varying_of(m: &MaterialDesc, attrs: &Attributes) -> Result<Option<Arc<Varying>>, String> {
+pub(super) fn varying_of(
+    m: &MaterialDesc,
+    attrs: &Attributes,
+) -> Result<Option<Arc<Varying>>, String> {
     let v = match (&m.model, &m.kd_attribute) {
         (Some(SurfaceModel::Blend { weight, .. }), _) if !weight.is_const() => {
             Varying::BlendWeight(resolve(weight, attrs)?)

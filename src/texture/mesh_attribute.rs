@@ -75,7 +75,10 @@ mod tests {
     #[test]
     fn params_evaluate_constants_textures_and_scaled_attributes() {
         let attr = |slot: u32| [slot as f32, 0.5, 0.25];
-        assert_eq!(Param::Const([0.1, 0.2, 0.3]).eval(0.3, 0.4, &attr), [0.1, 0.2, 0.3]);
+        assert_eq!(
+            Param::Const([0.1, 0.2, 0.3]).eval(0.3, 0.4, &attr),
+            [0.1, 0.2, 0.3]
+        );
         let t = Texture::checkerboard([0.8; 3], [0.2; 3], [1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
         let p = Param::Texture(Arc::new(t));
         // Mitsuba's uv (0.25, 0.25) is kalos' (0.25, 0.75): color0

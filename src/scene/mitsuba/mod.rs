@@ -52,9 +52,9 @@ mod reader;
 mod sensor;
 mod shape;
 mod spectra;
-mod varying;
 #[cfg(test)]
 mod tests;
+mod varying;
 
 use super::camera::{PixelFilter, Projection};
 use super::{

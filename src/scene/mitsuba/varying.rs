@@ -18,7 +18,10 @@ impl<'a> Loader<'a> {
         }
         let scale = self.float(p, "scale")?.unwrap_or(1.0);
         if !scale.is_finite() {
-            return Err(format!("{}: mesh_attribute scale {scale}: not finite", p.at));
+            return Err(format!(
+                "{}: mesh_attribute scale {scale}: not finite",
+                p.at
+            ));
         }
         self.unused(p, "texture 'mesh_attribute'");
         Ok(MeshAttribute {
@@ -34,7 +37,8 @@ impl<'a> Loader<'a> {
             Color::Rgb(v) => Param::Const(v),
             Color::Procedural(t) => Param::Texture(std::sync::Arc::new(t)),
             Color::Bitmap(path, sampling) => {
-                let mut t = crate::texture::Texture::load(&path).map_err(|e| format!("{at}: {e}"))?;
+                let mut t =
+                    crate::texture::Texture::load(&path).map_err(|e| format!("{at}: {e}"))?;
                 t.sampling = sampling;
                 Param::Texture(std::sync::Arc::new(t))
             }
@@ -47,7 +51,9 @@ impl<'a> Loader<'a> {
         let at = d.source.clone().unwrap_or_default();
         let mean = match (&d.kd_procedural, &d.map_kd, &d.kd_attribute) {
             (Some(t), _, _) => Some(t.mean()),
-            (None, Some(p), _) => Some(self.mean_rgb(Color::Bitmap(p.clone(), d.kd_sampling), &at)?),
+            (None, Some(p), _) => {
+                Some(self.mean_rgb(Color::Bitmap(p.clone(), d.kd_sampling), &at)?)
+            }
             (None, None, Some(a)) => Some([a.scale; 3]),
             _ => None,
         };
@@ -80,7 +86,8 @@ impl<'a> Loader<'a> {
         let values: [Param; 10] = values.try_into().expect("ten values");
         // Mitsuba's flag: spec_trans given and not a float 0
         let spec_trans = &values[9];
-        let has_trans = self.prop(el, "spec_trans").is_some() && *spec_trans != Param::Const([0.0; 3]);
+        let has_trans =
+            self.prop(el, "spec_trans").is_some() && *spec_trans != Param::Const([0.0; 3]);
         let eta = match (self.float(el, "eta")?, self.float(el, "specular")?) {
             (Some(_), Some(_)) => {
                 return Err(format!(
@@ -96,7 +103,10 @@ impl<'a> Loader<'a> {
             }
         };
         if !(eta.is_finite() && eta > 0.0) {
-            return Err(format!("{}: principled: eta {eta}: must be a positive number", el.at));
+            return Err(format!(
+                "{}: principled: eta {eta}: must be a positive number",
+                el.at
+            ));
         }
         let mut rates = [1.0f32; 3];
         for (r, name) in rates.iter_mut().zip([
@@ -198,7 +208,10 @@ mod tests {
         };
         assert_eq!(*weight, Param::Const([0.3; 3]));
         assert_eq!(bsdfs[0].kd, [0.0, 0.5, 0.5]);
-        assert!(matches!(bsdfs[1].model, Some(SurfaceModel::Conductor { .. })));
+        assert!(matches!(
+            bsdfs[1].model,
+            Some(SurfaceModel::Conductor { .. })
+        ));
         let d = scene(&format!(
             "<texture type=\"mesh_attribute\" id=\"t\"><string name=\"name\" value=\"face_weight\"/>\
              <float name=\"scale\" value=\"2\"/></texture>\
@@ -209,14 +222,19 @@ mod tests {
         let Some(SurfaceModel::Blend { weight, .. }) = &d.materials[0].model else {
             panic!()
         };
-        let Param::Attribute(a) = weight else { panic!("{weight:?}") };
+        let Param::Attribute(a) = weight else {
+            panic!("{weight:?}")
+        };
         assert_eq!((a.name.as_str(), a.scale), ("face_weight", 2.0));
         let d = scene(&format!(
             "<bsdf type=\"diffuse\" id=\"b\"><texture type=\"mesh_attribute\" name=\"reflectance\">\
              <string name=\"name\" value=\"vertex_color\"/></texture></bsdf>{SHAPE}"
         ))
         .unwrap();
-        assert_eq!(d.materials[0].kd_attribute.as_ref().unwrap().name, "vertex_color");
+        assert_eq!(
+            d.materials[0].kd_attribute.as_ref().unwrap().name,
+            "vertex_color"
+        );
     }
 
     /// Bad input: one line naming the place and what is wrong.
