@@ -55,10 +55,10 @@ impl Blend {
         let w = self.weight;
         let mut f = Spectrum::ZERO;
         if w < 1.0 {
-            f = f + self.pair[0].eval::<N>(wo, wi) * (1.0 - w);
+            f += self.pair[0].eval::<N>(wo, wi) * (1.0 - w);
         }
         if w > 0.0 {
-            f = f + self.pair[1].eval::<N>(wo, wi) * w;
+            f += self.pair[1].eval::<N>(wo, wi) * w;
         }
         f
     }
@@ -114,6 +114,7 @@ impl Blend {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::principled::tests::assert_weights_are_f_cos_over_pdf;
     use crate::material::{Conductor, Distribution, Lambert};
     use crate::sampling::chi2::{assert_chi2, chi2_sphere, TestRng};
 
@@ -196,21 +197,7 @@ mod tests {
                     900 + (k * 10 + j) as u64,
                 );
                 assert_chi2(&format!("blend {name} at {deg}"), &r);
-                for _ in 0..500 {
-                    let Some(s) = b.sample::<3>(o, rng.next_f32(), rng.next_2d()) else {
-                        continue;
-                    };
-                    if s.delta {
-                        continue;
-                    }
-                    let expect = b.eval::<3>(o, s.wi) * (s.wi.z / b.pdf(o, s.wi));
-                    for c in 0..3 {
-                        assert!(
-                            (s.weight[c] - expect[c]).abs() <= 1e-4 * expect[c].max(1.0),
-                            "{name}"
-                        );
-                    }
-                }
+                assert_weights_are_f_cos_over_pdf(&b, o, &mut rng, name, 1e-4);
             }
         }
     }

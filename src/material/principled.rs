@@ -2,8 +2,8 @@
 //! principledhelpers.h write it), formula for formula:
 //!
 //! - a main GGX lobe of alpha = max(0.001, roughness^2) reflecting with the blended
-//!   Fresnel term F_p = (1 - metallic)(1 - spec_tint) F(eta) + metallic S(base_color)
-//!   + (1 - metallic) spec_tint S(tint R0(eta)), S Schlick's approximation, F the
+//!   Fresnel term F_p = (1 - metallic)(1 - spec_tint) F(eta) + metallic S(base_color) +
+//!   (1 - metallic) spec_tint S(tint R0(eta)), S Schlick's approximation, F the
 //!   dielectric's; on the back side bsdf F(eta), bsdf = (1 - metallic) spec_trans;
 //! - a GGX transmission lobe of weight sqrt(base_color) bsdf (1 - F) (radiance scaled by
 //!   1 / eta_path^2);
@@ -458,7 +458,7 @@ impl Principled {
             wo
         };
         let pdf = self.pdf_m(wi, wo);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         let v = self.eval_cos(wi, wo);
@@ -481,4 +481,4 @@ impl Principled {
 
 #[cfg(test)]
 #[path = "principled_tests.rs"]
-mod tests;
+pub(crate) mod tests;

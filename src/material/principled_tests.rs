@@ -45,8 +45,10 @@ fn cases() -> [Principled; 3] {
 /// Mitsuba 3.9.1's eval (f |cos theta_o|) and pdf, printed by
 /// bench/mitsuba-principled-values.py: (case, wi, wo, eval, pdf), Mitsuba's wi being
 /// kalos' wo.
+type Row = (usize, [f32; 3], [f32; 3], [f32; 3], f32);
 #[rustfmt::skip]
-const MITSUBA: &[(usize, [f32; 3], [f32; 3], [f32; 3], f32)] = &[
+#[allow(clippy::excessive_precision, clippy::approx_constant)]
+const MITSUBA: &[Row] = &[
     (0, [5.0000000e-01, 0.0000000e+00, 8.6602540e-01], [-6.4278761e-01, 7.8718779e-17, 7.6604444e-01], [1.5326731e-01, 4.9494573e-01, 9.6320897e-02], 6.8824381e-01),
     (0, [1.7364818e-01, 0.0000000e+00, 9.8480775e-01], [5.3028762e-17, 8.6602540e-01, 5.0000000e-01], [1.0659464e-02, 3.9310805e-02, 5.8842404e-03], 4.1044198e-02),
     (0, [9.3969262e-01, 0.0000000e+00, 3.4202014e-01], [-3.2139380e-01, -1.1697778e-01, 9.3969262e-01], [2.0485613e-02, 7.3323488e-02, 1.1679303e-02], 7.6567754e-02),
@@ -113,19 +115,13 @@ fn chi2_principled_sampling() {
                 1200 + (k * 10 + j) as u64,
             );
             assert_chi2(&format!("principled {k} at {deg} (inside {inside})"), &r);
-            for _ in 0..500 {
-                let Some(s) = bsdf.sample::<3>(wo, rng.next_f32(), rng.next_2d()) else {
-                    continue;
-                };
-                let expect = bsdf.eval::<3>(wo, s.wi) * (s.wi.z.abs() / bsdf.pdf(wo, s.wi));
-                for c in 0..3 {
-                    assert!(
-                        (s.weight[c] - expect[c]).abs() <= 1e-3 * expect[c].max(1.0),
-                        "case {k}: {:?} vs {expect:?}",
-                        s.weight
-                    );
-                }
-            }
+            assert_weights_are_f_cos_over_pdf(
+                &bsdf,
+                wo,
+                &mut rng,
+                &format!("principled {k}"),
+                1e-3,
+            );
         }
     }
 }
@@ -151,4 +147,31 @@ fn principled_helpers_known_values() {
         s += g.d(m) as f64 * c * 2.0 * std::f64::consts::PI * 2.0 * x / n as f64;
     }
     assert!((s - 1.0).abs() < 2e-3, "{s}");
+}
+
+/// 500 samples of `b` at `wo`: each non-Dirac weight is f |cos| / pdf (within `tol`,
+/// relative above 1).
+pub(crate) fn assert_weights_are_f_cos_over_pdf(
+    b: &Bsdf,
+    wo: Vec3,
+    rng: &mut TestRng,
+    name: &str,
+    tol: f32,
+) {
+    for _ in 0..500 {
+        let Some(s) = b.sample::<3>(wo, rng.next_f32(), rng.next_2d()) else {
+            continue;
+        };
+        if s.delta {
+            continue;
+        }
+        let expect = b.eval::<3>(wo, s.wi) * (s.wi.z.abs() / b.pdf(wo, s.wi));
+        for c in 0..3 {
+            assert!(
+                (s.weight[c] - expect[c]).abs() <= tol * expect[c].max(1.0),
+                "{name}: {:?} vs {expect:?}",
+                s.weight
+            );
+        }
+    }
 }
