@@ -519,20 +519,22 @@ fn mutated_mitsuba_xml_never_panics() {
     assert!((10..=990).contains(&loaded), "{loaded} of 1000 loaded");
 }
 
-/// A binary little-endian PLY: a quad with normals and UVs and a colour per vertex.
+/// A binary little-endian PLY: a quad with normals and UVs, a colour per vertex and a
+/// weight per face (Mitsuba's mesh attributes `vertex_color`, `face_weight`).
 fn ply_seed() -> Vec<u8> {
-    let mut b = b"ply\nformat binary_little_endian 1.0\ncomment fuzz\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\nproperty uchar red\nelement face 2\nproperty list uchar int vertex_indices\nelement edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n".to_vec();
+    let mut b = b"ply\nformat binary_little_endian 1.0\ncomment fuzz\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement face 2\nproperty list uchar int vertex_indices\nproperty float weight_0\nelement edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n".to_vec();
     for (x, y) in [(0.0f32, 0.0f32), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
         for v in [x, y, 0.0, 0.0, 0.0, 1.0, x, y] {
             b.extend(v.to_le_bytes());
         }
-        b.push(255);
+        b.extend([255, 128, 0]);
     }
     for f in [[0i32, 1, 2], [0, 2, 3]] {
         b.push(3);
         for i in f {
             b.extend(i.to_le_bytes());
         }
+        b.extend(0.5f32.to_le_bytes());
     }
     b.extend(0i32.to_le_bytes());
     b.extend(1i32.to_le_bytes());
@@ -543,7 +545,9 @@ fn ply_seed() -> Vec<u8> {
 fn mutated_ply_never_panics() {
     use kalos::scene::ply::parse_ply;
     let seed = ply_seed();
-    assert_eq!(parse_ply(&seed, "fuzz.ply").unwrap().triangles.len(), 2);
+    let m = parse_ply(&seed, "fuzz.ply").unwrap();
+    assert_eq!(m.triangles.len(), 2);
+    assert_eq!(m.attributes.len(), 2, "vertex_color and face_weight");
     let ascii = "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
     assert_eq!(
         parse_ply(ascii.as_bytes(), "fuzz.ply")
@@ -591,6 +595,14 @@ fn mutated_ply_never_panics() {
                 let n = m.positions.len() as u32;
                 assert!(m.triangles.iter().flatten().all(|&i| i < n));
                 assert!(m.positions.iter().all(|p| p.is_finite()));
+                for a in &m.attributes {
+                    let n = if a.per_face {
+                        m.triangles.len()
+                    } else {
+                        m.positions.len()
+                    };
+                    assert_eq!(a.values.len(), n, "{}", a.name);
+                }
             }
             Err(e) => {
                 assert!(e.starts_with("fuzz.ply") && !e.contains('\n'), "{e}");

@@ -416,7 +416,13 @@ fn random_walk<const N: usize>(
             weight *= wo.dot(ns).abs() * wi.dot(ng).abs() / den;
             // Importance is not scaled by (eta_t / eta_i)^2: undo the radiance scaling
             // the dielectrics' `sample` applies on refraction.
-            if matches!(bsdf, Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_)) {
+            if matches!(
+                bsdf,
+                Bsdf::Dielectric(_)
+                    | Bsdf::RoughDielectric(_)
+                    | Bsdf::Principled(_)
+                    | Bsdf::Blend(_)
+            ) {
                 weight *= bsdf.adjoint_scale(wo_l, bs.wi);
             }
         }

@@ -526,6 +526,7 @@ mod tests {
             opacity_texture: None,
             normal_map: None,
             roughness: None,
+            varying: None,
         }
     }
 

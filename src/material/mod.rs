@@ -14,6 +14,7 @@
 //! subpaths with `Bsdf::adjoint_scale`.
 
 pub mod albedo;
+pub mod blend;
 pub mod conductor;
 pub mod dielectric;
 pub mod lambert;
@@ -21,13 +22,16 @@ pub mod microfacet;
 pub mod mirror;
 pub mod phong;
 pub mod plastic;
+pub mod principled;
 pub mod rough_dielectric;
 pub mod roughness;
 mod surface;
 pub mod thin_dielectric;
+pub mod varying;
 pub use surface::Material;
 
 pub use albedo::AlbedoTable;
+pub use blend::Blend;
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use lambert::Lambert;
@@ -35,6 +39,7 @@ pub use microfacet::Distribution;
 pub use mirror::Mirror;
 pub use phong::Phong;
 pub use plastic::Plastic;
+pub use principled::Principled;
 pub use rough_dielectric::RoughDielectric;
 pub use thin_dielectric::ThinDielectric;
 
@@ -136,6 +141,10 @@ pub enum Bsdf {
     RoughDielectric(RoughDielectric),
     /// Thin dielectric slab (Dirac reflection and straight transmission).
     ThinDielectric(ThinDielectric),
+    /// Mitsuba's `blendbsdf`: two BSDFs blended by a weight.
+    Blend(Blend),
+    /// Mitsuba's `principled` (Burley's BSDF).
+    Principled(Principled),
 }
 
 /// Luminance of an RGB triple (lobe selection weights).
@@ -182,7 +191,11 @@ impl Bsdf {
     /// slab is symmetric, so it is).
     #[inline]
     pub fn is_two_sided(&self) -> bool {
-        !matches!(self, Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_))
+        match self {
+            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::Principled(_) => false,
+            Bsdf::Blend(b) => b.pair.iter().all(Bsdf::is_two_sided),
+            _ => true,
+        }
     }
 
     /// Only Dirac lobes: next-event estimation is useless here.
@@ -191,6 +204,7 @@ impl Bsdf {
         match self {
             Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Black | Bsdf::ThinDielectric(_) => true,
             Bsdf::Conductor(c) => c.is_smooth(),
+            Bsdf::Blend(b) => b.pair.iter().all(Bsdf::is_delta),
             _ => false,
         }
     }
@@ -200,7 +214,12 @@ impl Bsdf {
     /// try them.
     #[inline]
     pub fn transmits(&self) -> bool {
-        matches!(self, Bsdf::RoughDielectric(_))
+        match self {
+            Bsdf::RoughDielectric(_) => true,
+            Bsdf::Principled(p) => p.transmits(),
+            Bsdf::Blend(b) => b.pair.iter().any(Bsdf::transmits),
+            _ => false,
+        }
     }
 
     /// The factor that turns a sampled weight f(wo, wi) |cos theta_i| / p, which carries
@@ -212,6 +231,13 @@ impl Bsdf {
         let eta = match self {
             Bsdf::Dielectric(d) => d.eta,
             Bsdf::RoughDielectric(d) => d.eta,
+            Bsdf::Principled(p) => p.eta,
+            // the first of the two that refracts (a blend of two refracting interfaces of
+            // different indices is scaled as the first)
+            Bsdf::Blend(b) => {
+                let s = b.pair.iter().map(|x| x.adjoint_scale(wo, wi));
+                return s.into_iter().find(|&s| s != 1.0).unwrap_or(1.0);
+            }
             _ => return 1.0,
         };
         if wo.z * wi.z >= 0.0 {
@@ -246,6 +272,8 @@ impl Bsdf {
             Bsdf::Conductor(c) => c.eval(wo, wi),
             Bsdf::Plastic(p) => p.eval(wo, wi),
             Bsdf::RoughDielectric(d) => d.eval(wo, wi),
+            Bsdf::Blend(b) => b.eval(wo, wi),
+            Bsdf::Principled(p) => p.eval(wo, wi),
             _ => Spectrum::ZERO,
         }
     }
@@ -274,6 +302,8 @@ impl Bsdf {
             Bsdf::Conductor(c) => c.pdf(wo, wi),
             Bsdf::Plastic(p) => p.pdf(wo, wi),
             Bsdf::RoughDielectric(d) => d.pdf(wo, wi),
+            Bsdf::Blend(b) => b.pdf(wo, wi),
+            Bsdf::Principled(p) => p.pdf(wo, wi),
             _ => 0.0,
         }
     }
@@ -310,6 +340,8 @@ impl Bsdf {
             Bsdf::Plastic(p) => p.sample(wo, u_lobe, u),
             Bsdf::RoughDielectric(d) => d.sample(wo, u_lobe, u),
             Bsdf::ThinDielectric(d) => d.sample(wo, u_lobe),
+            Bsdf::Blend(b) => b.sample(wo, u_lobe, u),
+            Bsdf::Principled(p) => p.sample(wo, u_lobe, u),
         }
     }
 
@@ -327,6 +359,8 @@ impl Bsdf {
                 Spectrum::from_rgb(p.base_albedo_rgb()) + Spectrum::from_rgb(p.coat_albedo_rgb())
             }
             Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => Spectrum::ONE,
+            Bsdf::Blend(b) => b.albedo(),
+            Bsdf::Principled(p) => Spectrum::from_rgb(p.albedo_rgb()),
         }
     }
 }

@@ -25,6 +25,9 @@ pub struct Material {
     pub normal_map: Option<crate::texture::normal::NormalMap>,
     /// A rough conductor's roughness per hit (anisotropic or textured; see `roughness`).
     pub roughness: Option<super::roughness::Roughness>,
+    /// Parameters that vary over the surface beyond `kd_texture` (the BSDF at a hit is
+    /// made from them; see `Scene::bsdf_at`).
+    pub varying: Option<std::sync::Arc<super::varying::Varying>>,
 }
 
 impl Material {

@@ -5,6 +5,7 @@
 pub mod builtin;
 pub mod camera;
 pub mod hit;
+pub mod mesh_attr;
 pub mod mitsuba;
 pub mod mtl;
 pub mod obj;
@@ -12,6 +13,7 @@ pub mod ply;
 
 pub mod toml_scene;
 pub mod tri_attr;
+mod varying;
 
 pub use crate::texture::Texture;
 use crate::texture::{self, normal as texture_normal};
@@ -48,6 +50,9 @@ pub struct MaterialDesc {
     /// A rough conductor's anisotropic or textured roughness (Mitsuba's `alpha_u`,
     /// `alpha_v`); None: the model's one `alpha`.
     pub roughness: Option<crate::material::roughness::Roughness>,
+    /// The diffuse reflectance from a mesh attribute (Mitsuba's `mesh_attribute`), used
+    /// instead of `kd`.
+    pub kd_attribute: Option<texture::mesh_attribute::MeshAttribute>,
     /// The share of light the surface stops (Mitsuba's `mask`, MTL's `d`); the rest
     /// passes straight through, as if the surface were not there (a cut-out).
     pub opacity: f32,
@@ -104,6 +109,13 @@ pub enum SurfaceModel {
     },
     /// `thindielectric`: a thin slab of index `eta` (no refraction of the direction).
     ThinDielectric { eta: f32, tint: Tint },
+    /// `principled`: Burley's BSDF as Mitsuba has it.
+    Principled(Box<crate::material::varying::PrincipledParams>),
+    /// `blendbsdf`: (1 - weight) times the first plus weight times the second.
+    Blend {
+        weight: texture::mesh_attribute::Param,
+        bsdfs: Box<[MaterialDesc; 2]>,
+    },
 }
 
 impl SurfaceModel {
@@ -117,6 +129,8 @@ impl SurfaceModel {
             SurfaceModel::Dielectric { alpha, .. } if *alpha > 0.0 => "roughdielectric",
             SurfaceModel::Dielectric { .. } => "dielectric",
             SurfaceModel::ThinDielectric { .. } => "thindielectric",
+            SurfaceModel::Blend { .. } => "blendbsdf",
+            SurfaceModel::Principled(_) => "principled",
         }
     }
 }
@@ -189,6 +203,7 @@ impl MaterialDesc {
             kd_procedural: None,
             normal_map: None,
             roughness: None,
+            kd_attribute: None,
             opacity: 1.0,
             map_opacity: None,
             emit_one_minus_albedo: false,
@@ -232,6 +247,8 @@ pub struct SceneDesc {
     /// in single precision).
     pub skipped_nonfinite: usize,
     pub warnings: Vec<String>,
+    /// Mesh attributes (Mitsuba's `vertex_*`, `face_*`) of the triangles that have them.
+    pub attributes: Vec<mesh_attr::AttributeDesc>,
 }
 
 impl SceneDesc {
@@ -304,6 +321,8 @@ pub struct Scene {
     pub uvs: tri_attr::TriAttr<[Vec2; 3]>,
     pub tri_material: Vec<u32>,
     pub materials: Vec<Material>,
+    /// Mesh attributes (none: nothing stored), read by materials that vary with them.
+    pub attributes: mesh_attr::Attributes,
     pub textures: Vec<Texture>,
     pub bvh: Bvh,
     pub lights: Lights,
@@ -332,6 +351,7 @@ impl Scene {
         let mut tex_paths: Vec<TexKey> = Vec::new();
         let mut materials = Vec::with_capacity(desc.materials.len());
         let mut material_warnings: Vec<String> = Vec::new();
+        let attributes = mesh_attr::Attributes::new(&desc.attributes, desc.positions.len());
         for m in &desc.materials {
             let kd_texture = match (&m.kd_procedural, &m.map_kd) {
                 (Some(t), _) => {
@@ -381,6 +401,8 @@ impl Scene {
                     .map_err(|e| format!("{} ({}): {e}", m.described(), model.plugin()))?,
                 None => Bsdf::from_mtl(kd, ks, m.ns, m.ni, m.illum),
             };
+            let varying = varying::varying_of(m, &attributes)
+                .map_err(|e| format!("{}: {e}", m.described()))?;
             let (emission, emission_table) = if m.emit_one_minus_albedo {
                 let t = AlbedoTable::new(&bsdf);
                 (t.hemispherical(true), Some(Arc::new(t)))
@@ -398,6 +420,7 @@ impl Scene {
                 opacity_texture,
                 normal_map: m.normal_map.clone(),
                 roughness: m.roughness.clone(),
+                varying,
             });
         }
         let cutouts = materials.iter().any(Material::is_cutout);
@@ -546,6 +569,7 @@ impl Scene {
             uvs: tri_attr::TriAttr::from_options(desc.uvs),
             tri_material: desc.material,
             materials,
+            attributes,
             textures,
             bvh,
             lights,
@@ -581,6 +605,10 @@ impl Scene {
     pub fn bsdf_at(&self, mat: &Material, hit: &SurfaceHit, wo: Vec3) -> crate::material::Bsdf {
         if mat.one_sided && wo.dot(hit.ng) <= 0.0 {
             return crate::material::Bsdf::Black;
+        }
+        if let Some(v) = &mat.varying {
+            let attr = |slot| self.attributes.eval(slot, hit.prim, hit.b1, hit.b2);
+            return v.bsdf(mat.bsdf, hit.uv.x, hit.uv.y, &attr);
         }
         let bsdf = match mat.kd_texture {
             Some(t) => mat
@@ -698,6 +726,11 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             }
             Bsdf::ThinDielectric(ThinDielectric { eta, tint })
         }
+        SurfaceModel::Blend {
+            ref weight,
+            ref bsdfs,
+        } => varying::blend_bsdf(weight, bsdfs)?,
+        SurfaceModel::Principled(ref p) => varying::principled_bsdf(p)?,
     })
 }
 

@@ -1,7 +1,8 @@
 //! PLY meshes (ASCII, binary little and big endian) read with the `ply-rs-bw` crate:
 //! positions, optional normals (`nx ny nz`) and texture coordinates (`u v`, `s t`,
 //! `texture_u texture_v`, `texture_s texture_t`), faces as index lists of any length
-//! (fan-triangulated). Other elements and properties (colours, ...) are read and ignored.
+//! (fan-triangulated), and the other vertex and face properties as Mitsuba's mesh
+//! attributes (see [`attribute_groups`]). Other elements are read and ignored.
 //! Errors are one line naming the file (and the header line where the crate knows it);
 //! short data, an index past the last vertex and a missing `x`/`y`/`z` are refused.
 //!
@@ -23,6 +24,20 @@ pub struct PlyMesh {
     pub uvs: Option<Vec<Vec2>>,
     /// Triangles (polygons fan-triangulated), indices checked against `positions`.
     pub triangles: Vec<[u32; 3]>,
+    /// Mitsuba's mesh attributes (`vertex_color`, `face_weight`, ...): none unless the
+    /// file has such properties.
+    pub attributes: Vec<PlyAttribute>,
+}
+
+/// A named mesh attribute: 1 or 3 values per vertex or per face (one value is
+/// repeated to three).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlyAttribute {
+    /// `vertex_...` or `face_...`, as Mitsuba names it.
+    pub name: String,
+    /// Per triangle (a polygon's value on each of its triangles) instead of per vertex.
+    pub per_face: bool,
+    pub values: Vec<[f32; 3]>,
 }
 
 #[derive(Default)]
@@ -30,6 +45,132 @@ struct Vertex {
     p: [f32; 3],
     n: [f32; 3],
     uv: [f32; 2],
+    /// The attribute properties' values, in the order of `EXTRA`'s vertex names.
+    extra: Vec<f32>,
+}
+
+thread_local! {
+    /// The names of the vertex and face properties read as attributes by the parse
+    /// running on this thread (the crate's `PropertyAccess::new` takes no context).
+    static EXTRA: std::cell::RefCell<[Vec<String>; 2]> = Default::default();
+}
+
+/// Store `p` in `extra` at the slot of property `name` among the attribute properties
+/// of element kind `k` (0 vertex, 1 face), if it is one.
+fn set_extra(k: usize, extra: &mut Vec<f32>, name: &str, p: &Property) -> PropertyAccessResult {
+    EXTRA.with(|e| {
+        let names = &e.borrow()[k];
+        let Some(i) = names.iter().position(|n| n == name) else {
+            return PropertyAccessResult::Ignored;
+        };
+        let Some(v) = attribute_value(p) else {
+            return PropertyAccessResult::UnsupportedType;
+        };
+        if extra.len() < names.len() {
+            extra.resize(names.len(), 0.0);
+        }
+        extra[i] = v;
+        PropertyAccessResult::Set
+    })
+}
+
+/// An attribute value as Mitsuba converts it: floats as they are, integers normalized
+/// to [0, 1] by their type's range and sRGB-decoded (its `Normalized | Gamma` fields).
+fn attribute_value(p: &Property) -> Option<f32> {
+    let norm = |v: f64, max: f64| crate::image_io::srgb_decode((v / max) as f32);
+    Some(match *p {
+        Property::Char(v) => norm(v as f64, i8::MAX as f64),
+        Property::UChar(v) => norm(v as f64, u8::MAX as f64),
+        Property::Short(v) => norm(v as f64, i16::MAX as f64),
+        Property::UShort(v) => norm(v as f64, u16::MAX as f64),
+        Property::Int(v) => norm(v as f64, i32::MAX as f64),
+        Property::UInt(v) => norm(v as f64, u32::MAX as f64),
+        Property::Float(v) => v,
+        Property::Double(v) => v as f32,
+        _ => return None,
+    })
+}
+
+/// Mitsuba's grouping of an element's other properties into attributes: `r g b` (or
+/// `red green blue`) make `{kind}color`; otherwise consecutive properties
+/// `{prefix}_{c}` whose one-letter postfixes run through one of `x y z`, `r g b`,
+/// `0 1 2`, `1 2 3` make `{kind}{prefix}` (`{kind}{prefix}_color` for `r g b`), kept
+/// when they are 1 or 3. Returns each attribute's name and its properties' names.
+pub fn attribute_groups(kind: &str, props: &[&str]) -> Vec<(String, Vec<String>)> {
+    const RESERVED: [&str; 20] = [
+        "x",
+        "y",
+        "z",
+        "nx",
+        "ny",
+        "nz",
+        "u",
+        "v",
+        "s",
+        "t",
+        "texture_u",
+        "texture_v",
+        "texture_s",
+        "texture_t",
+        "vertex_indices",
+        "vertex_index",
+        "r",
+        "g",
+        "b",
+        "a",
+    ];
+    const POSTFIX: [&str; 4] = ["xr01", "yg12", "zb23", "wa34"];
+    let mut out = Vec::new();
+    for rgb in [["r", "g", "b"], ["red", "green", "blue"]] {
+        if rgb.iter().all(|c| props.contains(c)) {
+            out.push((format!("{kind}color"), rgb.map(String::from).to_vec()));
+            break;
+        }
+    }
+    let mut flush = |prefix: &str, cat: usize, fields: &mut Vec<String>| {
+        if fields.len() == 1 || fields.len() == 3 {
+            let name = format!("{kind}{prefix}{}", if cat == 1 { "_color" } else { "" });
+            if !out.iter().any(|(n, _)| *n == name) {
+                out.push((name, std::mem::take(fields)));
+            }
+        }
+        fields.clear();
+    };
+    // the attribute being read: its prefix, postfix category and fields
+    let mut cur: Option<(String, usize)> = None;
+    let mut fields: Vec<String> = Vec::new();
+    for &name in props {
+        if RESERVED.contains(&name) || ["red", "green", "blue", "alpha"].contains(&name) {
+            continue;
+        }
+        let split = name
+            .rsplit_once('_')
+            .filter(|(_, post)| post.chars().count() == 1);
+        let Some((prefix, post)) = split else {
+            if let Some((p, c)) = cur.take() {
+                flush(&p, c, &mut fields);
+            }
+            continue;
+        };
+        let ch = post.chars().next().unwrap_or(' ');
+        if let Some((p, c)) = &cur {
+            let next = POSTFIX.get(fields.len()).and_then(|s| s.chars().nth(*c));
+            if p == prefix && next == Some(ch) {
+                fields.push(name.to_string());
+                continue;
+            }
+            let (p, c) = cur.take().unwrap();
+            flush(&p, c, &mut fields);
+        }
+        if let Some(c) = POSTFIX[0].chars().position(|x| x == ch) {
+            cur = Some((prefix.to_string(), c));
+            fields.push(name.to_string());
+        }
+    }
+    if let Some((p, c)) = cur.take() {
+        flush(&p, c, &mut fields);
+    }
+    out
 }
 
 fn scalar(p: &Property) -> Option<f32> {
@@ -60,7 +201,7 @@ impl PropertyAccess for Vertex {
             "nz" => &mut self.n[2],
             "u" | "s" | "texture_u" | "texture_s" => &mut self.uv[0],
             "v" | "t" | "texture_v" | "texture_t" => &mut self.uv[1],
-            _ => return PropertyAccessResult::Ignored,
+            _ => return set_extra(0, &mut self.extra, name, &p),
         };
         match scalar(&p) {
             Some(v) => {
@@ -76,6 +217,8 @@ impl PropertyAccess for Vertex {
 struct Face {
     /// Indices as signed 64-bit, so negative values from signed lists can be refused.
     idx: Vec<i64>,
+    /// The attribute properties' values, in the order of `EXTRA`'s face names.
+    extra: Vec<f32>,
 }
 
 impl PropertyAccess for Face {
@@ -84,7 +227,7 @@ impl PropertyAccess for Face {
     }
     fn set_property(&mut self, name: &str, p: Property) -> PropertyAccessResult {
         if name != "vertex_indices" && name != "vertex_index" {
-            return PropertyAccessResult::Ignored;
+            return set_extra(1, &mut self.extra, name, &p);
         }
         self.idx = match p {
             Property::ListChar(v) => v.into_iter().map(i64::from).collect(),
@@ -192,6 +335,18 @@ fn parse_inner(bytes: &[u8], file: &str) -> Result<PlyMesh, String> {
     let has_n = has(&["nx"]) && has(&["ny"]) && has(&["nz"]);
     let has_uv =
         has(&["u", "s", "texture_u", "texture_s"]) && has(&["v", "t", "texture_v", "texture_t"]);
+    // the other properties that make attributes, their names in the parse's slots
+    let groups = |el: &str, kind: &str| {
+        let props: Vec<&str> = header
+            .elements
+            .get(el)
+            .map(|d| d.properties.keys().map(String::as_str).collect())
+            .unwrap_or_default();
+        attribute_groups(kind, &props)
+    };
+    let (vgroups, fgroups) = (groups("vertex", "vertex_"), groups("face", "face_"));
+    let flat = |g: &[(String, Vec<String>)]| g.iter().flat_map(|(_, f)| f.clone()).collect();
+    EXTRA.with(|e| *e.borrow_mut() = [flat(&vgroups), flat(&fgroups)]);
     let fparser = Parser::<Face>::new();
     let iparser = Parser::<Ignored>::new();
     let mut verts: Vec<Vertex> = Vec::new();
@@ -253,7 +408,33 @@ fn parse_inner(bytes: &[u8], file: &str) -> Result<PlyMesh, String> {
         normals: has_n.then(|| Vec::with_capacity(verts.len())),
         uvs: has_uv.then(|| Vec::with_capacity(verts.len())),
         triangles: Vec::with_capacity(faces.len()),
+        attributes: Vec::new(),
     };
+    // per vertex: each group's 1 or 3 slots, one value repeated to three
+    let values = |extra: &[f32], start: usize, n: usize| -> [f32; 3] {
+        let v = |i: usize| extra.get(start + i.min(n - 1)).copied().unwrap_or(0.0);
+        [v(0), v(1), v(2)]
+    };
+    let mut start = 0;
+    for (name, fields) in &vgroups {
+        mesh.attributes.push(PlyAttribute {
+            name: name.clone(),
+            per_face: false,
+            values: verts
+                .iter()
+                .map(|v| values(&v.extra, start, fields.len()))
+                .collect(),
+        });
+        start += fields.len();
+    }
+    let first_face_attr = mesh.attributes.len();
+    for (name, _) in &fgroups {
+        mesh.attributes.push(PlyAttribute {
+            name: name.clone(),
+            per_face: true,
+            values: Vec::with_capacity(faces.len()),
+        });
+    }
     for (i, v) in verts.iter().enumerate() {
         let p = Vec3::from(v.p);
         if !p.is_finite() {
@@ -289,6 +470,12 @@ fn parse_inner(bytes: &[u8], file: &str) -> Result<PlyMesh, String> {
                 face.idx[k] as u32,
                 face.idx[k + 1] as u32,
             ]);
+            let mut start = 0;
+            for (g, (_, fields)) in fgroups.iter().enumerate() {
+                let v = values(&face.extra, start, fields.len());
+                mesh.attributes[first_face_attr + g].values.push(v);
+                start += fields.len();
+            }
         }
     }
     Ok(mesh)
@@ -349,6 +536,42 @@ mod tests {
             assert_eq!(m.triangles, vec![[0, 1, 2]]);
             assert!(m.normals.is_none() && m.uvs.is_none());
         }
+    }
+
+    /// Properties beyond positions, normals and uvs group into Mitsuba's attributes:
+    /// `color_0..2` per vertex is `vertex_color`, `weight_0` per face `face_weight`,
+    /// `red green blue` (8-bit: normalized, sRGB-decoded) `face_color`; a face's values
+    /// go to each of its triangles.
+    #[test]
+    fn vertex_and_face_properties_are_attributes() {
+        let ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float color_0\nproperty float color_1\nproperty float color_2\nelement face 2\nproperty list uchar int vertex_indices\nproperty float weight_0\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n0 0 0 0.1 0.2 0.3\n1 0 0 0.4 0.5 0.6\n1 1 0 0.7 0.8 0.9\n0 1 0 1 1 1\n4 0 1 2 3 0.25 255 0 128\n3 0 1 2 0.75 0 0 0\n";
+        let m = parse_ply(ply.as_bytes(), "a.ply").unwrap();
+        assert_eq!(m.triangles.len(), 3);
+        let names: Vec<&str> = m.attributes.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(names, ["vertex_color", "face_color", "face_weight"]);
+        let c = &m.attributes[0];
+        assert!(!c.per_face);
+        assert_eq!(c.values[1], [0.4, 0.5, 0.6]);
+        let w = &m.attributes[2];
+        assert!(w.per_face);
+        assert_eq!(w.values, vec![[0.25; 3], [0.25; 3], [0.75; 3]]);
+        let mid = crate::image_io::srgb_decode(128.0 / 255.0);
+        assert_eq!(m.attributes[1].values[0], [1.0, 0.0, mid]);
+        // Mitsuba's postfix schemes, and groups of 2 or 4 are not attributes
+        let g = attribute_groups(
+            "vertex_",
+            &[
+                "x", "nx", "foo_x", "foo_y", "foo_z", "bar_r", "bar_g", "bar_b", "w_1", "uv_0",
+                "uv_1", "q",
+            ],
+        );
+        let names: Vec<&str> = g.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["vertex_foo", "vertex_bar_color", "vertex_w"]);
+        // a mesh without such properties has none
+        assert!(parse_ply(ASCII.as_bytes(), "q.ply")
+            .unwrap()
+            .attributes
+            .is_empty());
     }
 
     #[test]

@@ -4,6 +4,7 @@
 //! Mitsuba's `checkerboard` is the 2 x 2 texture of its two colours, looked up nearest and
 //! repeated ([`Texture::checkerboard`]).
 
+pub mod mesh_attribute;
 pub mod normal;
 
 use std::path::Path;

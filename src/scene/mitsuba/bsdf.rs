@@ -110,6 +110,10 @@ impl<'a> Loader<'a> {
                 m.kd = [1.0; 3];
                 m.kd_procedural = Some(std::sync::Arc::new(t));
             }
+            Some(Color::Attribute(a)) => {
+                m.kd = [1.0; 3];
+                m.kd_attribute = Some(a);
+            }
         }
     }
 
@@ -322,7 +326,7 @@ impl<'a> Loader<'a> {
                             Some(Color::Bitmap(p, sampling)) => {
                                 inner_m.map_opacity = Some((p, sampling, OpacityFrom::Luminance));
                             }
-                            Some(c @ Color::Procedural(_)) => {
+                            Some(c @ (Color::Procedural(_) | Color::Attribute(_))) => {
                                 self.warn(
                                     "mask procedural",
                                     format!("{}: a checkerboard as mask opacity is not supported: rendered with its mean", el.at),
@@ -346,7 +350,8 @@ impl<'a> Loader<'a> {
                 self.unused(el, &format!("bsdf '{kind}'"));
                 return Ok(inner_m);
             }
-            "blendbsdf" | "mixturebsdf" => {
+            "blendbsdf" => return self.blend(el, name),
+            "mixturebsdf" => {
                 let inner = nested()?;
                 self.mark_all(el);
                 self.warn(
@@ -364,7 +369,8 @@ impl<'a> Loader<'a> {
                     return Ok(im);
                 }
             }
-            "principled" | "principledthin" => {
+            "principled" => self.principled(el, &mut m)?,
+            "principledthin" => {
                 let c = self.color(el, "base_color", Use::Reflectance)?;
                 self.set_diffuse(&mut m, c, 0.5);
                 self.mark_all(el);

@@ -23,7 +23,7 @@ impl<'a> Loader<'a> {
         let (intensity, texture, (w, h)) = match self.color(el, "irradiance", Use::Unbounded)? {
             None => (UNIT_EMISSION, None, (1, 1)),
             Some(Color::Rgb(c)) => (c, None, (1, 1)),
-            Some(Color::Procedural(_)) => {
+            Some(Color::Procedural(_) | Color::Attribute(_)) => {
                 return Err(format!(
                     "{}: projector emitter: irradiance: a bitmap or a constant is expected",
                     el.at
@@ -108,7 +108,7 @@ impl<'a> Loader<'a> {
                             el.at
                         ))
                     }
-                    Some(Color::Procedural(_)) => {
+                    Some(Color::Procedural(_) | Color::Attribute(_)) => {
                         return Err(format!(
                             "{}: spot emitter: texture: a bitmap is expected",
                             el.at

@@ -55,6 +55,7 @@ mod shape;
 mod spectra;
 #[cfg(test)]
 mod tests;
+mod varying;
 
 use super::camera::{PixelFilter, Projection};
 use super::{

@@ -134,6 +134,7 @@ impl<'a> Loader<'a> {
                             .collect(),
                     ),
                     triangles: vec![[0, 1, 2], [0, 2, 3]],
+                    attributes: Vec::new(),
                 }
             }
             "cube" => cube(),
@@ -244,7 +245,7 @@ impl<'a> Loader<'a> {
                 })
                 .flatten()
         };
-        for t in &m.triangles {
+        for (f, t) in m.triangles.iter().enumerate() {
             let i = order.map(|k| t[k] as usize);
             let v = i.map(|k| pos[k]);
             let n = nrm.as_ref().and_then(|ns| {
@@ -252,7 +253,11 @@ impl<'a> Loader<'a> {
                 n.iter().all(|x| x.length_squared() > 0.5).then_some(n)
             });
             let uv = m.uvs.as_ref().map(|uv| i.map(|k| uv[k]));
+            let tri = self.desc.positions.len();
             self.desc.push_triangle(v, n, uv, mat);
+            if !m.attributes.is_empty() && self.desc.positions.len() > tri {
+                self.desc.push_attributes(&m.attributes, tri, i, f);
+            }
         }
     }
 }

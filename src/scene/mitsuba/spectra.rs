@@ -19,6 +19,8 @@ pub(super) enum Color {
     Bitmap(PathBuf, crate::texture::Sampling),
     /// A texture made here (Mitsuba's `checkerboard`).
     Procedural(crate::scene::Texture),
+    /// Mitsuba's `mesh_attribute`: a mesh's attribute, looked up per hit.
+    Attribute(crate::texture::mesh_attribute::MeshAttribute),
 }
 
 /// What is said of a negative colour value.
@@ -487,6 +489,7 @@ impl<'a> Loader<'a> {
                             a, b, to_uv,
                         )))
                     }
+                    "mesh_attribute" => self.mesh_attribute(p).map(Color::Attribute),
                     k => {
                         self.mark_all(p);
                         self.warn(
@@ -598,6 +601,8 @@ impl<'a> Loader<'a> {
                 .map(|t| t.mean())
                 .map_err(|e| format!("{at}: {e}")),
             Color::Procedural(t) => Ok(t.mean()),
+            // unknown before the meshes are read: the scale
+            Color::Attribute(a) => Ok([a.scale; 3]),
         }
     }
 
