@@ -46,7 +46,9 @@
 //! parameter that was not read; a plugin name Mitsuba does not know is an error. Files are
 
 mod bsdf;
+mod cylinder;
 mod emitter;
+mod instance;
 mod properties;
 mod reader;
 mod sensor;
@@ -86,6 +88,10 @@ struct Loader<'a> {
     /// The BSDFs and textures being built, innermost last: a `<ref>` back to one of them
     /// is a cycle.
     building: RefCell<Vec<*const El>>,
+    /// Group index of a `shapegroup` element already read (see `instance.rs`).
+    groups: HashMap<*const El, u32>,
+    /// A shapegroup's shapes are being read.
+    in_group: bool,
 }
 
 type R<T> = Result<T, String>;
@@ -195,6 +201,8 @@ fn parse_inner(
         sensor_seen: false,
         default_material: None,
         building: RefCell::new(Vec::new()),
+        groups: HashMap::new(),
+        in_group: false,
     };
     // every element with an id, at any depth
     fn collect<'a>(els: &'a [El], ids: &mut HashMap<&'a str, &'a El>) -> R<()> {
@@ -258,7 +266,7 @@ fn parse_inner(
         }
     }
     desc.warnings.extend(warnings);
-    if desc.positions.is_empty() {
+    if desc.positions.is_empty() && desc.instances.is_empty() {
         // name what was left out, where: that is why the scene is empty
         let why = desc
             .warnings
