@@ -5,7 +5,9 @@
 //!   `kalos.load(path, key=value)`, replaces the `<default>` of its name; one the file never
 //!   names is an error), `<include>`, `id` / `ref`, `<path>` search folders (every file
 //!   name is looked up in them, the one read last first, then beside the scene file);
-//! - shapes `obj`, `ply`, `rectangle`, `cube`, `sphere` (tessellated), `disk`, with
+//! - `shapegroup` / `instance` (instanced: see `instance.rs`);
+//! - shapes `obj`, `ply`, `serialized`, `rectangle`, `cube`, `sphere` and `cylinder`
+//!   (tessellated), `disk`, with
 //!   `to_world` (`matrix`, `translate`, `rotate`, `scale`, `lookat`, composed in order: each
 //!   step left-multiplies), `flip_normals`, `face_normals`, `flip_tex_coords`;
 //! - BSDFs `diffuse`, `conductor`, `roughconductor`, `plastic`, `roughplastic`,
