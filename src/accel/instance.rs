@@ -93,7 +93,8 @@ impl Instances {
                 first: first as u32,
             });
             first += group_tris[g as usize] as u64;
-            boxes.push(world_box(&bvh.bounds(), &to_world));
+            let b = transformed_bounds(&bvh.bounds(), &to_world);
+            boxes.push((b.min.into(), b.max.into()));
         }
         if base as u64 + first > u32::MAX as u64 / 2 {
             return Err(format!(
@@ -249,11 +250,11 @@ impl Instances {
     }
 }
 
-/// The world box of a local box under `m` (its eight corners); empty stays empty.
-fn world_box(b: &Bounds3, m: &Affine3A) -> (Vec3A, Vec3A) {
-    let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+/// The box holding `b` moved by `m` (its eight corners); empty stays empty.
+pub fn transformed_bounds(b: &Bounds3, m: &Affine3A) -> Bounds3 {
+    let mut out = Bounds3::EMPTY;
     if b.is_empty() {
-        return (lo, hi);
+        return out;
     }
     for k in 0..8 {
         let c = Vec3::new(
@@ -261,11 +262,9 @@ fn world_box(b: &Bounds3, m: &Affine3A) -> (Vec3A, Vec3A) {
             if k & 2 == 0 { b.min.y } else { b.max.y },
             if k & 4 == 0 { b.min.z } else { b.max.z },
         );
-        let w = Vec3A::from(m.transform_point3(c));
-        lo = lo.min(w);
-        hi = hi.max(w);
+        out.grow(m.transform_point3(c));
     }
-    (lo, hi)
+    out
 }
 
 /// Builds the top-level node over `order[lo..hi]` (median split of the centroids on the

@@ -59,7 +59,7 @@ use node::*;
 use rayon::prelude::*;
 use traversal::*;
 
-pub use instance::Instances;
+pub use instance::{transformed_bounds, Instances};
 
 /// Instruction set a BVH's queries run with (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

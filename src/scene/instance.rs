@@ -103,16 +103,9 @@ pub fn instance_bounds(groups: &[GroupDesc], instances: &[InstanceDesc]) -> Boun
         .collect();
     let mut b = Bounds3::EMPTY;
     for i in instances {
-        let Some(l) = local.get(i.group as usize).filter(|l| !l.is_empty()) else {
-            continue;
-        };
-        for k in 0..8 {
-            let c = Vec3::new(
-                if k & 1 == 0 { l.min.x } else { l.max.x },
-                if k & 2 == 0 { l.min.y } else { l.max.y },
-                if k & 4 == 0 { l.min.z } else { l.max.z },
-            );
-            b.grow(i.to_world.transform_point3(c));
+        if let Some(l) = local.get(i.group as usize) {
+            let m = glam::Affine3A::from_mat4(i.to_world);
+            b = b.union(&crate::accel::transformed_bounds(l, &m));
         }
     }
     b
