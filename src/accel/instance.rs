@@ -79,7 +79,7 @@ impl Instances {
             };
             let to_world = Affine3A::from_mat4(m);
             let det = to_world.matrix3.determinant();
-            if !(det.is_finite() && det.abs() > 1e-30) || !m.is_finite() {
+            if !(det.is_finite() && det.abs() > 1e-30 && m.is_finite()) {
                 return Err(format!(
                     "instance {i}: its to_world is not invertible (determinant {det})"
                 ));
@@ -226,7 +226,7 @@ impl Instances {
                 a.max(b).min_element().min(t_max.get()),
             );
             // (conservative by a few ulps, as the triangle BVH's slab test)
-            if !(t1 * (1.0 + 4.0 * f32::EPSILON) >= t0) {
+            if t1 * (1.0 + 4.0 * f32::EPSILON) < t0 {
                 continue;
             }
             if n.count > 0 {
