@@ -615,3 +615,6 @@ fn mutated_ply_never_panics() {
 
 #[path = "fuzz_inputs/films.rs"]
 mod films;
+
+#[path = "fuzz_inputs/serialized.rs"]
+mod serialized;

@@ -46,6 +46,7 @@
 
 mod build;
 mod collapse;
+mod instance;
 mod leaf;
 mod node;
 mod traversal;
@@ -57,6 +58,8 @@ use leaf::*;
 use node::*;
 use rayon::prelude::*;
 use traversal::*;
+
+pub use instance::{transformed_bounds, Instances};
 
 /// Instruction set a BVH's queries run with (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

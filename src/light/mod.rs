@@ -466,7 +466,12 @@ impl Lights {
     /// Light index of scene triangle `prim`, if it emits.
     #[inline]
     pub fn light_of(&self, prim: u32) -> Option<u32> {
-        let l = self.light_of_tri[prim as usize];
+        // (instanced triangles, numbered past the scene's own, never emit)
+        let l = self
+            .light_of_tri
+            .get(prim as usize)
+            .copied()
+            .unwrap_or(u32::MAX);
         (l != u32::MAX).then_some(l)
     }
 

@@ -91,9 +91,18 @@ impl Scene {
         let h = if self.cutouts {
             self.intersect_cutouts(ray, t_max)
         } else {
-            self.bvh.intersect(ray, t_max)
+            self.closest(ray, t_max)
         };
         Some(self.surface_hit(h?))
+    }
+
+    /// The BVH's closest hit, instances included.
+    #[inline(always)]
+    fn closest(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        match &self.instances {
+            None => self.bvh.intersect(ray, t_max),
+            Some(i) => i.closest(&self.bvh, ray, t_max),
+        }
     }
 
     /// Whether a surface stops light along `ray` before `t_max` (shadow rays).
@@ -101,6 +110,8 @@ impl Scene {
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         if self.cutouts {
             self.intersect_cutouts(ray, t_max).is_some()
+        } else if let Some(i) = &self.instances {
+            i.occluded(&self.bvh, ray, t_max)
         } else {
             self.bvh.occluded(ray, t_max)
         }
@@ -108,12 +119,15 @@ impl Scene {
 
     /// Answers a batch of queries as `Bvh::trace`, cut-outs included.
     pub fn trace(&self, queries: &[RayQuery], answers: &mut [RayAnswer]) {
-        if !self.cutouts {
+        if !self.cutouts && self.instances.is_none() {
             return self.bvh.trace(queries, answers);
         }
         for (q, a) in queries.iter().zip(answers.iter_mut()) {
             *a = match *q {
-                RayQuery::Closest(r, t) => RayAnswer::Closest(self.intersect_cutouts(&r, t)),
+                RayQuery::Closest(r, t) if self.cutouts => {
+                    RayAnswer::Closest(self.intersect_cutouts(&r, t))
+                }
+                RayQuery::Closest(r, t) => RayAnswer::Closest(self.closest(&r, t)),
                 RayQuery::Occluded(r, t) => RayAnswer::Occluded(self.occluded(&r, t)),
             };
         }
@@ -139,7 +153,7 @@ impl Scene {
         let mut r = *ray;
         let mut t_base = 0.0;
         for _ in 0..MAX_CROSSINGS {
-            let mut h = self.bvh.intersect(&r, t_max - t_base)?;
+            let mut h = self.closest(&r, t_max - t_base)?;
             h.t += t_base;
             if !self.passes(ray, &h) {
                 return Some(h);
@@ -186,10 +200,11 @@ impl Scene {
     /// geometric normal `ng`.
     fn dp_duv(&self, prim: u32, ng: Vec3) -> (Vec3, Vec3) {
         let i = prim as usize;
-        let tangents = self
-            .uvs
-            .get(i)
-            .and_then(|uvs| crate::texture::normal::tangents(&self.tris[i], uvs));
+        let (tri, uvs) = match self.tris.get(i) {
+            Some(t) => (*t, self.uvs.get(i).copied()),
+            None => (self.instanced_triangle(prim), self.instanced_uvs(prim)),
+        };
+        let tangents = uvs.and_then(|uvs| crate::texture::normal::tangents(&tri, &uvs));
         tangents.unwrap_or_else(|| ng.any_orthonormal_pair())
     }
 
@@ -223,11 +238,26 @@ impl Scene {
     #[inline(always)]
     pub fn surface_hit(&self, h: Hit) -> SurfaceHit {
         let i = h.prim as usize;
+        if i >= self.tris.len() {
+            return self.instanced_hit(h);
+        }
+        self.hit_with(h, self.normals.get(i), self.uvs.get(i))
+    }
+
+    /// [`Scene::surface_hit`] with the hit triangle's shading normals and uvs (in world
+    /// space).
+    #[inline(always)]
+    pub(super) fn hit_with(
+        &self,
+        h: Hit,
+        normals: Option<&[Vec3; 3]>,
+        uvs: Option<&[Vec2; 3]>,
+    ) -> SurfaceHit {
         let b0 = 1.0 - h.b1 - h.b2;
         // Position and normal come with the hit, from the BVH's copy of the triangle.
         let p = h.p;
         let ng = h.n.normalize();
-        let ns = match self.normals.get(i) {
+        let ns = match normals {
             Some(n) => {
                 let s = (n[0] * b0 + n[1] * h.b1 + n[2] * h.b2).normalize_or_zero();
                 if s == Vec3::ZERO {
@@ -240,7 +270,7 @@ impl Scene {
             }
             None => ng,
         };
-        let uv = match self.uvs.get(i) {
+        let uv = match uvs {
             Some(uv) => uv[0] * b0 + uv[1] * h.b1 + uv[2] * h.b2,
             None => Vec2::new(h.b1, h.b2),
         };

@@ -5,11 +5,13 @@
 pub mod builtin;
 pub mod camera;
 pub mod hit;
+pub mod instance;
 pub mod mesh_attr;
 pub mod mitsuba;
 pub mod mtl;
 pub mod obj;
 pub mod ply;
+pub mod serialized;
 
 pub mod toml_scene;
 pub mod tri_attr;
@@ -241,6 +243,9 @@ pub struct SceneDesc {
     /// Light from far away (at most one).
     pub environment: Option<EnvironmentDesc>,
     pub point_lights: Vec<PointLightDesc>,
+    /// Shape groups (triangles stored once, in their own space) and their instances.
+    pub groups: Vec<instance::GroupDesc>,
+    pub instances: Vec<instance::InstanceDesc>,
     /// Zero-area faces skipped while loading.
     pub skipped_degenerate: usize,
     /// Faces skipped because a coordinate or the face's normal overflows (not finite
@@ -284,7 +289,10 @@ impl SceneDesc {
                 b.grow(*v);
             }
         }
-        b
+        if self.instances.is_empty() {
+            return b;
+        }
+        b.union(&instance::instance_bounds(&self.groups, &self.instances))
     }
 }
 
@@ -325,6 +333,8 @@ pub struct Scene {
     pub attributes: mesh_attr::Attributes,
     pub textures: Vec<Texture>,
     pub bvh: Bvh,
+    /// Instances of shape groups (`None`: the scene has none, and `bvh` is all of it).
+    pub instances: Option<instance::Instanced>,
     pub lights: Lights,
     pub camera: CameraDesc,
     pub defaults: RenderDefaults,
@@ -346,7 +356,7 @@ pub struct Scene {
 
 impl Scene {
     /// Build textures, materials, lights and the BVH from a description.
-    pub fn build(desc: SceneDesc, load_seconds: f64) -> Result<Scene, String> {
+    pub fn build(mut desc: SceneDesc, load_seconds: f64) -> Result<Scene, String> {
         let mut textures: Vec<Texture> = Vec::new();
         let mut tex_paths: Vec<TexKey> = Vec::new();
         let mut materials = Vec::with_capacity(desc.materials.len());
@@ -426,7 +436,14 @@ impl Scene {
         let cutouts = materials.iter().any(Material::is_cutout);
         let normal_maps = materials.iter().any(|m| m.normal_map.is_some());
         let t0 = Instant::now();
+        let bounds = desc.bounds();
         let bvh = Bvh::build(&desc.positions);
+        let instances = instance::Instanced::build(
+            std::mem::take(&mut desc.groups),
+            &desc.instances,
+            desc.positions.len() as u32,
+        )
+        .map_err(|e| format!("scene {}: {e}", desc.name))?;
         let bvh_seconds = t0.elapsed().as_secs_f64();
         // an emitter whose power overflows, named where the scene defines it
         let too_bright = |e: crate::light::TooBright| {
@@ -453,7 +470,6 @@ impl Scene {
         };
         let mut lights =
             Lights::new(&desc.positions, &desc.material, &materials).map_err(too_bright)?;
-        let bounds = desc.bounds();
         let env = match &desc.environment {
             Some(e) => Some(environment_light(e)?),
             None => None,
@@ -559,7 +575,8 @@ impl Scene {
             load_seconds,
             bvh_seconds,
             bvh_nodes: bvh.node_count(),
-            bvh_bytes: bvh.memory_bytes(),
+            bvh_bytes: bvh.memory_bytes()
+                + instances.as_ref().map_or(0, |i| i.accel.memory_bytes()),
             camera: Some(camera),
             camera_from: camera_how,
         };
@@ -572,6 +589,7 @@ impl Scene {
             attributes,
             textures,
             bvh,
+            instances,
             lights,
             camera,
             defaults: desc.defaults,
@@ -595,7 +613,10 @@ impl Scene {
     /// The material of triangle `prim`.
     #[inline]
     pub fn material_of(&self, prim: u32) -> &Material {
-        &self.materials[self.tri_material[prim as usize] as usize]
+        match self.tri_material.get(prim as usize) {
+            Some(&m) => &self.materials[m as usize],
+            None => self.instanced_material(prim),
+        }
     }
 
     /// The BSDF of material `mat` at a hit seen from direction `wo`: its Kd from its texture

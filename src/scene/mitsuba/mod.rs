@@ -5,7 +5,9 @@
 //!   `kalos.load(path, key=value)`, replaces the `<default>` of its name; one the file never
 //!   names is an error), `<include>`, `id` / `ref`, `<path>` search folders (every file
 //!   name is looked up in them, the one read last first, then beside the scene file);
-//! - shapes `obj`, `ply`, `rectangle`, `cube`, `sphere` (tessellated), `disk`, with
+//! - `shapegroup` / `instance` (instanced: see `instance.rs`);
+//! - shapes `obj`, `ply`, `serialized`, `rectangle`, `cube`, `sphere` and `cylinder`
+//!   (tessellated), `disk`, with
 //!   `to_world` (`matrix`, `translate`, `rotate`, `scale`, `lookat`, composed in order: each
 //!   step left-multiplies), `flip_normals`, `face_normals`, `flip_tex_coords`;
 //! - BSDFs `diffuse`, `conductor`, `roughconductor`, `plastic`, `roughplastic`,
@@ -46,7 +48,9 @@
 //! parameter that was not read; a plugin name Mitsuba does not know is an error. Files are
 
 mod bsdf;
+mod cylinder;
 mod emitter;
+mod instance;
 mod properties;
 mod reader;
 mod roughness;
@@ -88,6 +92,10 @@ struct Loader<'a> {
     /// The BSDFs and textures being built, innermost last: a `<ref>` back to one of them
     /// is a cycle.
     building: RefCell<Vec<*const El>>,
+    /// Group index of a `shapegroup` element already read (see `instance.rs`).
+    groups: HashMap<*const El, u32>,
+    /// A shapegroup's shapes are being read.
+    in_group: bool,
 }
 
 type R<T> = Result<T, String>;
@@ -197,6 +205,8 @@ fn parse_inner(
         sensor_seen: false,
         default_material: None,
         building: RefCell::new(Vec::new()),
+        groups: HashMap::new(),
+        in_group: false,
     };
     // every element with an id, at any depth
     fn collect<'a>(els: &'a [El], ids: &mut HashMap<&'a str, &'a El>) -> R<()> {
@@ -260,7 +270,7 @@ fn parse_inner(
         }
     }
     desc.warnings.extend(warnings);
-    if desc.positions.is_empty() {
+    if desc.positions.is_empty() && desc.instances.is_empty() {
         // name what was left out, where: that is why the scene is empty
         let why = desc
             .warnings

@@ -9,14 +9,19 @@ impl<'a> Loader<'a> {
         if !known_plugin("shape", kind) {
             return Err(format!("{}: unknown shape plugin '{kind}'", el.at));
         }
+        match kind {
+            "shapegroup" => return self.shape_group(el).map(|_| ()),
+            "instance" => return self.instance(el),
+            _ => {}
+        }
         let supported = matches!(
             kind,
-            "obj" | "ply" | "rectangle" | "cube" | "sphere" | "disk"
+            "obj" | "ply" | "serialized" | "rectangle" | "cube" | "sphere" | "disk" | "cylinder"
         );
         if !supported {
             self.mark_all(el);
-            let why = if kind == "serialized" {
-                " (Mitsuba's own binary mesh format; convert it to PLY, e.g. with Mitsuba's Python API)"
+            let why = if kind == "sdfgrid" {
+                " (signed-distance grids are not supported)"
             } else {
                 ""
             };
@@ -97,8 +102,8 @@ impl<'a> Loader<'a> {
             self.mark_all(el);
             return Ok(());
         }
-        let xf = self.transform(el, "to_world")?;
-        let flip = self.boolean(el, "flip_normals")?.unwrap_or(false);
+        let mut xf = self.transform(el, "to_world")?;
+        let mut flip = self.boolean(el, "flip_normals")?.unwrap_or(false);
         let face_normals = self.boolean(el, "face_normals")?.unwrap_or(false);
         let flip_tex = self.boolean(el, "flip_tex_coords")?.unwrap_or(true);
         // local mesh: positions, triangles, optional normals and uvs (kalos' v: up)
@@ -137,6 +142,19 @@ impl<'a> Loader<'a> {
                     attributes: Vec::new(),
                 }
             }
+            "serialized" => {
+                let f = self
+                    .string(el, "filename")?
+                    .ok_or_else(|| format!("{}: serialized shape without a filename", el.at))?;
+                let index = self.int(el, "shape_index")?.unwrap_or(0);
+                crate::scene::serialized::load_serialized(&self.path(&f), index)
+                    .map_err(|e| format!("{}: {e}", el.at))?
+            }
+            "cylinder" => {
+                let (m, place, f) = self.cylinder(el, xf, flip)?;
+                (xf, flip) = (place, f);
+                m
+            }
             "cube" => cube(),
             "disk" => disk(128),
             "sphere" => {
@@ -155,7 +173,8 @@ impl<'a> Loader<'a> {
         };
         self.unused(el, &format!("shape '{kind}'"));
         // a mesh file without normals is smooth-shaded in Mitsuba unless face_normals
-        let smooth = matches!(kind, "obj" | "ply") && mesh.normals.is_none() && !face_normals;
+        let smooth =
+            matches!(kind, "obj" | "ply" | "serialized") && mesh.normals.is_none() && !face_normals;
         self.push_mesh(&mesh, xf, flip, face_normals, smooth, mat);
         Ok(())
     }
