@@ -125,6 +125,7 @@ mod tests {
             specular: [1.0; 3],
             alpha,
             dist: Distribution::Ggx,
+            aniso: None,
         })
     }
 

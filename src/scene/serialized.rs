@@ -198,6 +198,7 @@ pub fn parse_serialized(b: &[u8], shape_index: i64) -> Result<PlyMesh, String> {
         normals,
         uvs,
         triangles,
+        attributes: Vec::new(),
     })
 }
 

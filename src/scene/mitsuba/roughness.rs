@@ -50,6 +50,11 @@ impl<'a> Loader<'a> {
                     t.sampling.to_uv,
                 )),
                 Color::Procedural(t) => Some(t),
+                Color::Attribute(_) => {
+                    return Err(format!(
+                        "{at}: {name}: a mesh attribute as a roughness is not supported; give a float or a texture"
+                    ))
+                }
             },
         };
         match texture {
