@@ -164,6 +164,10 @@ mod tests {
                 r#"<texture name="alpha_u" type="bitmap"><string name="filename" value="no-such.png"/></texture><float name="alpha_v" value="0.1"/>"#,
                 "no-such.png",
             ),
+            (
+                r#"<texture name="alpha_u" type="mesh_attribute"><string name="name" value="vertex_alpha"/></texture><float name="alpha_v" value="0.1"/>"#,
+                "alpha_u: a mesh attribute as a roughness is not supported",
+            ),
         ] {
             let e = conductor(alphas).unwrap_err();
             assert!(e.contains(needle) && !e.contains('\n'), "{alphas}: {e}");
