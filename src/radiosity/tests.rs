@@ -361,3 +361,29 @@ fn lookup_finds_the_element_of_a_point() {
         }
     }
 }
+
+/// A `--time` budget makes the default mesh as fine as a tenth of it allows: a budget too
+/// small for more keeps the coarse solution, a large one reaches the default mesh and not
+/// past it, and an explicit `--radiosity-max-area` is kept whatever the budget.
+#[test]
+fn the_default_mesh_follows_the_time_budget() {
+    let scene = crate::scene::load("cornell").unwrap();
+    let elements = |time_budget: Option<f64>, max_area: Option<f32>| {
+        let set = RadiositySettings {
+            time_budget,
+            max_area,
+            // the mesh is what is tested: one shot solves enough
+            max_shots: Some(1),
+            ..Default::default()
+        };
+        Solution::compute(&scene, &set, 3, &crate::progress::Silent)
+            .unwrap()
+            .stats
+            .elements
+    };
+    let default = elements(None, None);
+    let coarse = elements(Some(1e-4), None);
+    assert!(coarse * 8 < default, "{coarse} against {default} elements");
+    assert_eq!(elements(Some(1e6), None), default);
+    assert_eq!(elements(Some(1e-4), Some(0.02)), elements(None, Some(0.02)));
+}

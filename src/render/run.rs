@@ -175,8 +175,13 @@ pub fn render_scene(
             job.dtf.eps_r.unwrap_or_default()
         ));
     }
-    let integrator = pool
-        .install(|| Integrator::prepare(scene, set.integrator, set.spectral.bands(), progress))?;
+    // a preprocess with its default mesh follows a --time budget (what is left of it)
+    let mut integ_set = set.integrator;
+    if let JobBudget::Time(t) = budget {
+        integ_set.radiosity.time_budget = Some((t - t_prep.elapsed().as_secs_f64()).max(0.0));
+    }
+    let integrator =
+        pool.install(|| Integrator::prepare(scene, integ_set, set.spectral.bands(), progress))?;
     let prepare_seconds = t_prep.elapsed().as_secs_f64();
     // --time covers the preprocess too (equal-time comparisons count it).
     let time_left = job.time.map(|t| {
