@@ -28,7 +28,7 @@ pub mod solve;
 #[cfg(test)]
 mod tests;
 
-use crate::material::Bsdf;
+use crate::material::{AlbedoTable, Bsdf};
 use crate::math::Vec3;
 use crate::progress::Progress;
 use crate::scene::Scene;
@@ -184,20 +184,27 @@ fn uplift(rgb: [f32; 3], bands: usize) -> Result<Vec<f64>, String> {
     Ok(v.into_iter().map(|x| x as f64).collect())
 }
 
-/// The diffuse reflectance of a material (Kd; a texture by its mean), None if it has no
-/// diffuse lobe.
+/// The reflectance rho the solution gives a material with a diffuse lobe (Kd, a texture by
+/// its mean), None if it has none. A diffuse + Phong material also reflects its glossy
+/// lobe's hemispherical albedo, carried as if diffuse: the power it reflects is then right
+/// (a closed room of such walls emitting 1 - a(w) solves to radiance 1, as the path tracer
+/// renders it), only its direction is averaged. Left out, as before 2026-12-06, it darkened
+/// every lookup lit through a glossy floor (the Blender living room's lookup 4.7% dark).
 fn diffuse_kd(scene: &Scene, m: u32) -> Option<[f32; 3]> {
     let mat = &scene.materials[m as usize];
-    let kd = match mat.bsdf {
-        Bsdf::Diffuse(l) => l.kd,
-        Bsdf::DiffuseGlossy(l, _) => l.kd,
+    let (kd, glossy) = match mat.bsdf {
+        Bsdf::Diffuse(l) => (l.kd, [0.0; 3]),
+        Bsdf::DiffuseGlossy(l, p) => {
+            let lobe = Bsdf::DiffuseGlossy(crate::material::Lambert { kd: [0.0; 3] }, p);
+            (l.kd, AlbedoTable::new(&lobe).hemispherical(false))
+        }
         _ => return None,
     };
     let kd = match mat.kd_texture {
         Some(t) => scene.textures[t as usize].mean(),
         None => kd,
     };
-    (kd.iter().any(|&v| v > 0.0)).then_some(kd)
+    (kd.iter().any(|&v| v > 0.0)).then(|| std::array::from_fn(|c| kd[c] + glossy[c]))
 }
 
 /// The scene's planar ideal mirrors (`Bsdf::Mirror` triangles) with their reflectance per
@@ -279,9 +286,12 @@ impl Solution {
         let mut any_diffuse = false;
         let mut area_total = 0.0f64;
         let mut areas = Vec::with_capacity(nt);
+        let rho_of: Vec<Option<[f32; 3]>> = (0..scene.materials.len() as u32)
+            .map(|m| diffuse_kd(scene, m))
+            .collect();
         for (t, tri) in scene.tris.iter().enumerate() {
             let m = scene.tri_material[t];
-            let d = diffuse_kd(scene, m);
+            let d = rho_of[m as usize];
             any_diffuse |= d.is_some();
             let meshed = d.is_some() || scene.materials[m as usize].is_emissive();
             let a = 0.5 * (tri[1] - tri[0]).cross(tri[2] - tri[0]).length() as f64;
