@@ -254,12 +254,7 @@ impl Scene {
     /// [`Scene::surface_hit`] with the hit triangle's shading normals and uvs (in world
     /// space).
     #[inline(always)]
-    fn hit_with(
-        &self,
-        h: Hit,
-        normals: Option<&[Vec3; 3]>,
-        uvs: Option<&[Vec2; 3]>,
-    ) -> SurfaceHit {
+    fn hit_with(&self, h: Hit, normals: Option<&[Vec3; 3]>, uvs: Option<&[Vec2; 3]>) -> SurfaceHit {
         let b0 = 1.0 - h.b1 - h.b2;
         // Position and normal come with the hit, from the BVH's copy of the triangle.
         let p = h.p;

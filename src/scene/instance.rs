@@ -150,6 +150,9 @@ impl Scene {
     pub(super) fn instanced_attrs(&self, prim: u32) -> (Option<[Vec3; 3]>, Option<[Vec2; 3]>) {
         let (ins, i, g, k) = self.instanced(prim);
         let nm = ins.accel.normal_matrix(i);
-        (g.normals.get(k).map(|n| n.map(|v| nm * v)), g.uvs.get(k).copied())
+        (
+            g.normals.get(k).map(|n| n.map(|v| nm * v)),
+            g.uvs.get(k).copied(),
+        )
     }
 }

@@ -80,7 +80,10 @@ impl super::SceneDesc {
     /// 1M-triangle mesh without them, held through the build until 2026-12-06).
     pub fn take_tri_attrs(&mut self) -> (TriAttr<[Vec3; 3]>, TriAttr<[Vec2; 3]>) {
         let normals = TriAttr::from_options(std::mem::take(&mut self.normals));
-        (normals, TriAttr::from_options(std::mem::take(&mut self.uvs)))
+        (
+            normals,
+            TriAttr::from_options(std::mem::take(&mut self.uvs)),
+        )
     }
 }
 
