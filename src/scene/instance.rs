@@ -9,11 +9,9 @@
 //! roulette's escape estimate, which read the scene's own triangles, see them only as
 //! occluders of the rays they trace through the scene.
 
-use super::hit::SurfaceHit;
 use super::tri_attr::TriAttr;
 use super::Scene;
 use crate::accel::{Hit, Instances};
-use crate::material::Material;
 use crate::math::{Bounds3, Ray, Vec2, Vec3};
 use glam::Mat4;
 
@@ -124,11 +122,12 @@ impl Scene {
         (ins, i, &ins.groups[g as usize], local as usize)
     }
 
-    /// The material of an instanced triangle.
+    /// The material index of an instanced triangle.
+    #[cold]
     #[inline(never)]
-    pub(super) fn instanced_material(&self, prim: u32) -> &Material {
+    pub(super) fn instanced_material(&self, prim: u32) -> u32 {
         let (_, _, g, k) = self.instanced(prim);
-        &self.materials[g.material[k] as usize]
+        g.material[k]
     }
 
     /// An instanced triangle in world space.
@@ -144,13 +143,16 @@ impl Scene {
         g.uvs.get(k).copied()
     }
 
-    /// [`Scene::surface_hit`] of a hit on an instance (its point and normal already in
-    /// world space): the group's shading normals moved by the instance's normal matrix.
+    /// The shading normals (moved to world space by the instance's normal matrix) and
+    /// uvs of an instanced triangle, for [`Scene::surface_hit`].
+    #[cold]
     #[inline(never)]
-    pub(super) fn instanced_hit(&self, h: Hit) -> SurfaceHit {
-        let (ins, i, g, k) = self.instanced(h.prim);
+    pub(super) fn instanced_attrs(&self, prim: u32) -> (Option<[Vec3; 3]>, Option<[Vec2; 3]>) {
+        let (ins, i, g, k) = self.instanced(prim);
         let nm = ins.accel.normal_matrix(i);
-        let normals = g.normals.get(k).map(|n| n.map(|v| nm * v));
-        self.hit_with(h, normals.as_ref(), g.uvs.get(k))
+        (
+            g.normals.get(k).map(|n| n.map(|v| nm * v)),
+            g.uvs.get(k).copied(),
+        )
     }
 }

@@ -437,6 +437,7 @@ impl Scene {
         let normal_maps = materials.iter().any(|m| m.normal_map.is_some());
         let t0 = Instant::now();
         let bounds = desc.bounds();
+        let (normals, uvs) = desc.take_tri_attrs();
         let bvh = Bvh::build(&desc.positions);
         let instances = instance::Instanced::build(
             std::mem::take(&mut desc.groups),
@@ -582,8 +583,8 @@ impl Scene {
         };
         Ok(Scene {
             tris: desc.positions,
-            normals: tri_attr::TriAttr::from_options(desc.normals),
-            uvs: tri_attr::TriAttr::from_options(desc.uvs),
+            normals,
+            uvs,
             tri_material: desc.material,
             materials,
             attributes,
@@ -613,10 +614,8 @@ impl Scene {
     /// The material of triangle `prim`.
     #[inline]
     pub fn material_of(&self, prim: u32) -> &Material {
-        match self.tri_material.get(prim as usize) {
-            Some(&m) => &self.materials[m as usize],
-            None => self.instanced_material(prim),
-        }
+        let m = self.tri_material.get(prim as usize).copied();
+        &self.materials[m.unwrap_or_else(|| self.instanced_material(prim)) as usize]
     }
 
     /// The BSDF of material `mat` at a hit seen from direction `wo`: its Kd from its texture

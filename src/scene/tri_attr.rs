@@ -8,6 +8,8 @@
 //! triangle has it stores the values densely (no index), and a mixed one stores an
 //! index per triangle into the values of the triangles that have it.
 
+use crate::math::{Vec2, Vec3};
+
 /// Index of a triangle without the attribute, in [`TriAttr`]'s sparse form.
 const NONE: u32 = u32::MAX;
 
@@ -68,6 +70,20 @@ impl<T: Copy> TriAttr<T> {
             TriAttr::Dense(v) => Some(v.as_ptr().wrapping_add(i) as *const u8),
             TriAttr::Sparse { index, .. } => Some(index.as_ptr().wrapping_add(i) as *const u8),
         }
+    }
+}
+
+impl super::SceneDesc {
+    /// The shading normals and texture coordinates in their compact form, taken out of
+    /// the description before the BVH build, the peak of a large mesh's memory: one
+    /// `Option` per triangle costs 40 and 28 bytes where absent too (68 MB on a
+    /// 1M-triangle mesh without them, held through the build until 2026-12-06).
+    pub fn take_tri_attrs(&mut self) -> (TriAttr<[Vec3; 3]>, TriAttr<[Vec2; 3]>) {
+        let normals = TriAttr::from_options(std::mem::take(&mut self.normals));
+        (
+            normals,
+            TriAttr::from_options(std::mem::take(&mut self.uvs)),
+        )
     }
 }
 
