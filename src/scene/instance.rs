@@ -17,6 +17,8 @@ use crate::material::Material;
 use crate::math::{Bounds3, Ray, Vec2, Vec3};
 use glam::Mat4;
 
+pub mod sdf;
+
 /// A shape group's triangles, in the group's space.
 #[derive(Clone, Debug, Default)]
 pub struct GroupDesc {
@@ -26,6 +28,8 @@ pub struct GroupDesc {
     pub normals: Vec<Option<[Vec3; 3]>>,
     pub uvs: Vec<Option<[Vec2; 3]>>,
     pub material: Vec<u32>,
+    /// Signed-distance grids (see [`sdf`]).
+    pub sdfs: Vec<sdf::SdfDesc>,
 }
 
 /// One placement of a group.
@@ -48,6 +52,7 @@ struct GroupAttrs {
 pub struct Instanced {
     pub accel: Instances,
     groups: Vec<GroupAttrs>,
+    sdf: Option<sdf::SdfPart>,
 }
 
 impl Instanced {
@@ -63,6 +68,7 @@ impl Instanced {
         let tris: Vec<&[[Vec3; 3]]> = groups.iter().map(|g| g.positions.as_slice()).collect();
         let placed: Vec<(u32, Mat4)> = instances.iter().map(|i| (i.group, i.to_world)).collect();
         let accel = Instances::build(&tris, &placed, base)?;
+        let sdf = sdf::SdfPart::build(&groups, instances)?;
         let groups = groups
             .into_iter()
             .map(|g| GroupAttrs {
@@ -72,22 +78,29 @@ impl Instanced {
                 material: g.material,
             })
             .collect();
-        Ok(Some(Instanced { accel, groups }))
+        Ok(Some(Instanced { accel, groups, sdf }))
     }
 
     /// The closest hit of the scene's own triangles (`bvh`) and the instances.
     #[inline]
     pub fn closest(&self, bvh: &crate::accel::Bvh, ray: &Ray, t_max: f32) -> Option<Hit> {
         let own = bvh.intersect(ray, t_max);
-        self.accel
+        let best = self
+            .accel
             .intersect(ray, own.map_or(t_max, |h| h.t))
-            .or(own)
+            .or(own);
+        match &self.sdf {
+            None => best,
+            Some(s) => s.accel.intersect(ray, best.map_or(t_max, |h| h.t)).or(best),
+        }
     }
 
     /// Whether the scene's own triangles or an instance stop `ray` before `t_max`.
     #[inline]
     pub fn occluded(&self, bvh: &crate::accel::Bvh, ray: &Ray, t_max: f32) -> bool {
-        bvh.occluded(ray, t_max) || self.accel.occluded(ray, t_max)
+        bvh.occluded(ray, t_max)
+            || self.accel.occluded(ray, t_max)
+            || self.sdf.as_ref().is_some_and(|s| s.accel.occluded(ray, t_max))
     }
 }
 
@@ -98,7 +111,7 @@ pub fn instance_bounds(groups: &[GroupDesc], instances: &[InstanceDesc]) -> Boun
         .map(|g| {
             let mut b = Bounds3::EMPTY;
             g.positions.iter().flatten().for_each(|p| b.grow(*p));
-            b
+            b.union(&sdf::group_bounds(g))
         })
         .collect();
     let mut b = Bounds3::EMPTY;
@@ -127,12 +140,18 @@ impl Scene {
     /// The material of an instanced triangle.
     #[inline(never)]
     pub(super) fn instanced_material(&self, prim: u32) -> &Material {
+        if sdf::is_sdf(prim) {
+            return self.sdf_material(prim);
+        }
         let (_, _, g, k) = self.instanced(prim);
         &self.materials[g.material[k] as usize]
     }
 
     /// An instanced triangle in world space.
     pub(super) fn instanced_triangle(&self, prim: u32) -> [Vec3; 3] {
+        if sdf::is_sdf(prim) {
+            return [Vec3::ZERO; 3];
+        }
         let (ins, i, g, k) = self.instanced(prim);
         let m = ins.accel.to_world(i);
         g.tris[k].map(|p| m.transform_point3(p))
@@ -140,6 +159,9 @@ impl Scene {
 
     /// An instanced triangle's texture coordinates.
     pub(super) fn instanced_uvs(&self, prim: u32) -> Option<[Vec2; 3]> {
+        if sdf::is_sdf(prim) {
+            return None;
+        }
         let (_, _, g, k) = self.instanced(prim);
         g.uvs.get(k).copied()
     }
@@ -148,6 +170,9 @@ impl Scene {
     /// world space): the group's shading normals moved by the instance's normal matrix.
     #[inline(never)]
     pub(super) fn instanced_hit(&self, h: Hit) -> SurfaceHit {
+        if sdf::is_sdf(h.prim) {
+            return self.sdf_hit(h);
+        }
         let (ins, i, g, k) = self.instanced(h.prim);
         let nm = ins.accel.normal_matrix(i);
         let normals = g.normals.get(k).map(|n| n.map(|v| nm * v));
