@@ -67,7 +67,7 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
     ),
     (
         "test_various_shapes_path",
-        "the sdfgrid instance (a signed-distance grid) is not read: left out, warned",
+        "1.2% of pixel-channels off (2026-12-06): the sdfgrid torus renders and passes; the failures lie along the checker edges of the disk, the PLY rectangle and the flat cube, seen at grazing angles; not measured why",
     ),
 ];
 

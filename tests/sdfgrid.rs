@@ -68,7 +68,9 @@ fn a_sphere_grid_is_hit_where_the_sphere_is() {
         for (s, shift) in [(&alone, 0.0), (&grouped, 10.0)] {
             let off = Vec3::new(shift, 0.0, 0.0);
             let ray = Ray::new(o + off, target - o);
-            let hit = s.intersect(&ray, f32::INFINITY).expect("aimed at the sphere");
+            let hit = s
+                .intersect(&ray, f32::INFINITY)
+                .expect("aimed at the sphere");
             let p = hit.p - off;
             assert!(
                 (p.length() - 1.2).abs() < bound,
@@ -121,7 +123,11 @@ fn bad_grid_volumes_are_one_line_naming_the_file() {
             "",
         ),
         ("empty", sphere_vol(5, 0.9), "never change sign"),
-        ("text", b"VOX3 not a volume".to_vec(), "does not start with 'VOL'"),
+        (
+            "text",
+            b"VOX3 not a volume".to_vec(),
+            "does not start with 'VOL'",
+        ),
     ];
     for (name, bytes, what) in cases {
         let f = format!("{name}.vol");

@@ -74,7 +74,11 @@ fn trilerp_grad(f: &[f32; 8], p: Vec3) -> Vec3 {
     let dx = [f[1] - f[0], f[3] - f[2], f[5] - f[4], f[7] - f[6]];
     let dy = [f[2] - f[0], f[3] - f[1], f[6] - f[4], f[7] - f[5]];
     let dz = [f[4] - f[0], f[5] - f[1], f[6] - f[2], f[7] - f[3]];
-    Vec3::new(bilerp(dx, p.y, p.z), bilerp(dy, p.x, p.z), bilerp(dz, p.x, p.y))
+    Vec3::new(
+        bilerp(dx, p.y, p.z),
+        bilerp(dy, p.x, p.z),
+        bilerp(dz, p.x, p.y),
+    )
 }
 
 /// Real roots of a t^2 + b t + c (ascending; a linear equation's one root twice), as
@@ -500,7 +504,9 @@ impl SdfShapes {
             first += grid.occupied() as u64;
         }
         if first >= (u32::MAX - SDF_FIRST_PRIM) as u64 {
-            return Err(format!("{first} voxels in signed-distance grids: more than kalos numbers"));
+            return Err(format!(
+                "{first} voxels in signed-distance grids: more than kalos numbers"
+            ));
         }
         Ok(SdfShapes { placed })
     }
@@ -562,7 +568,10 @@ impl SdfShapes {
     /// number `prim`.
     pub fn locate(&self, prim: u32) -> Option<usize> {
         let k = prim.checked_sub(SDF_FIRST_PRIM)?;
-        let i = self.placed.partition_point(|p| p.first <= k).checked_sub(1)?;
+        let i = self
+            .placed
+            .partition_point(|p| p.first <= k)
+            .checked_sub(1)?;
         (k - self.placed[i].first < self.placed[i].grid.occupied() as u32).then_some(i)
     }
 

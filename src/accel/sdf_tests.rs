@@ -86,7 +86,10 @@ fn sphere_grid_hits_agree_with_the_analytic_sphere() {
         let p = o + d * t;
         let n_true = (p - C).normalize();
         let n = g.eval(v, p).1.normalize();
-        assert!(n.dot(n_true) > (1.0f32 / 32.0 / R).cos(), "{n} against {n_true}");
+        assert!(
+            n.dot(n_true) > (1.0f32 / 32.0 / R).cos(),
+            "{n} against {n_true}"
+        );
         let ns = g.smooth_normal(p).normalize();
         assert!(ns.dot(n_true) > 0.998, "smooth {ns} against {n_true}");
         // the same answer for a shadow query, and none before the hit
@@ -158,7 +161,11 @@ fn placed_grids_hit_in_world_space() {
     let h = s.intersect(&ray, f32::INFINITY).unwrap();
     assert!((h.t - 5.8).abs() < 4e-3, "{}", h.t);
     assert!((h.p - Vec3::new(3.0, 2.0, 0.8)).length() < 4e-3, "{}", h.p);
-    assert!(h.n.normalize().dot(-Vec3::Z) > (1.0f32 / 32.0 / R).cos(), "{}", h.n);
+    assert!(
+        h.n.normalize().dot(-Vec3::Z) > (1.0f32 / 32.0 / R).cos(),
+        "{}",
+        h.n
+    );
     assert!(s.shading_normal(&h).dot(-Vec3::Z) > 0.999);
     // the second grid's voxels are numbered after the first's
     assert_eq!(s.locate(h.prim), Some(1));
@@ -169,7 +176,9 @@ fn placed_grids_hit_in_world_space() {
     assert!(s.occluded(&ray, 5.9));
     assert!(!s.occluded(&ray, 5.7));
     // a ray between the two spheres misses both
-    assert!(s.intersect(&Ray::new(Vec3::new(-2.0, 4.0, 0.5), Vec3::X), 1e9).is_none());
+    assert!(s
+        .intersect(&Ray::new(Vec3::new(-2.0, 4.0, 0.5), Vec3::X), 1e9)
+        .is_none());
     let e = SdfShapes::build(&[(g, Mat4::ZERO, true)]).unwrap_err();
     assert!(e.contains("not invertible"), "{e}");
 }

@@ -100,7 +100,10 @@ impl Instanced {
     pub fn occluded(&self, bvh: &crate::accel::Bvh, ray: &Ray, t_max: f32) -> bool {
         bvh.occluded(ray, t_max)
             || self.accel.occluded(ray, t_max)
-            || self.sdf.as_ref().is_some_and(|s| s.accel.occluded(ray, t_max))
+            || self
+                .sdf
+                .as_ref()
+                .is_some_and(|s| s.accel.occluded(ray, t_max))
     }
 }
 

@@ -43,14 +43,22 @@ fn mutated_vol_never_panics() {
         no_panic("vol", &input, || match parse_vol(&b) {
             Err(e) => assert!(!e.contains('\n'), "{e}"),
             Ok(v) => {
-                assert_eq!(v.data.len() as u64, v.res.iter().map(|&r| r as u64).product::<u64>() * v.channels as u64);
+                assert_eq!(
+                    v.data.len() as u64,
+                    v.res.iter().map(|&r| r as u64).product::<u64>() * v.channels as u64
+                );
                 if v.channels != 1 {
                     return;
                 }
                 match SdfGrid::new(v.res, v.data) {
                     Err(e) => assert!(!e.contains('\n'), "{e}"),
                     Ok(g) => {
-                        let s = SdfShapes::build(&[(std::sync::Arc::new(g), glam::Mat4::IDENTITY, true)]).unwrap();
+                        let s = SdfShapes::build(&[(
+                            std::sync::Arc::new(g),
+                            glam::Mat4::IDENTITY,
+                            true,
+                        )])
+                        .unwrap();
                         for i in 0..16 {
                             let o = Vec3::new(-1.0, 0.1 * i as f32, 0.5);
                             let r = Ray::new(o, Vec3::new(1.0, 0.03 * i as f32, 0.01));

@@ -30,7 +30,10 @@ impl<'a> Loader<'a> {
             self.mark_all(el);
             self.warn(
                 &format!("shape {kind}"),
-                format!("{}: unsupported shape '{kind}': left out of the scene", el.at),
+                format!(
+                    "{}: unsupported shape '{kind}': left out of the scene",
+                    el.at
+                ),
             );
             return Ok(());
         }

@@ -188,7 +188,10 @@ fn unsupported_things_are_warned_once_with_the_line() {
     let w = d.warnings.join("\n");
     assert!(w.contains("t.xml:2: unsupported bsdf 'hair'"), "{w}");
     assert!(w.contains("t.xml:4: parameter 'wobble'"), "{w}");
-    assert!(w.contains("t.xml:5: unsupported shape 'linearcurve'"), "{w}");
+    assert!(
+        w.contains("t.xml:5: unsupported shape 'linearcurve'"),
+        "{w}"
+    );
     assert_eq!(d.warnings.len(), 3, "{w}");
 }
 

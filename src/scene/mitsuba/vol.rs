@@ -60,7 +60,9 @@ pub fn parse_vol(b: &[u8]) -> Result<VolGrid, String> {
         ));
     }
     let count = dims.iter().map(|&n| n as u64).product::<u64>();
-    let need = count.checked_mul(4).and_then(|n| n.checked_add(HEADER as u64));
+    let need = count
+        .checked_mul(4)
+        .and_then(|n| n.checked_add(HEADER as u64));
     if need != Some(b.len() as u64) {
         let need = need.map_or("more than 2^64".to_string(), |n| n.to_string());
         return Err(format!(
