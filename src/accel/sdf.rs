@@ -23,6 +23,7 @@ use super::instance::{build_top, TopNode};
 use super::Hit;
 use crate::math::{Bounds3, Ray, Vec3};
 use glam::{Affine3A, Mat3, Mat4, Vec3A};
+use std::cmp::Ordering::{Equal, Greater, Less};
 use std::sync::Arc;
 
 /// The first hit number (`Hit::prim`) of the grids' voxels: the scene's own and instanced
@@ -115,7 +116,8 @@ fn solve_cubic(t_end: f32, f_beg: f32, f_end: f32, c: [f32; 4]) -> Option<f32> {
             }
         }
     }
-    if !(f_near * f_far <= 0.0) {
+    // (a NaN product fails too)
+    if !matches!((f_near * f_far).partial_cmp(&0.0), Some(Less | Equal)) {
         return None;
     }
     let mut t = t_near + (t_far - t_near) * (-f_near / (f_far - f_near));
@@ -137,7 +139,11 @@ fn solve_cubic(t_end: f32, f_beg: f32, f_end: f32, c: [f32; 4]) -> Option<f32> {
         } else {
             0.5 * (t_near + t_far)
         };
-        let done = !((t_next - t).abs() >= SOLVE_EPSILON);
+        // (NaN ends the iteration)
+        let done = !matches!(
+            (t_next - t).abs().partial_cmp(&SOLVE_EPSILON),
+            Some(Greater | Equal)
+        );
         t = t_next;
         if done {
             break;
@@ -519,7 +525,7 @@ impl SdfShapes {
         let t0 = a.min(b).max_element().max(0.0);
         let t1 = a.max(b).min_element().min(t_max);
         // (NaN from a zero direction in a face plane counts as entering)
-        !(t1 * (1.0 + 4.0 * f32::EPSILON) < t0)
+        (t1 * (1.0 + 4.0 * f32::EPSILON)).partial_cmp(&t0) != Some(Less)
     }
 
     fn query(&self, ray: &Ray, t_max: f32, any: bool) -> Option<(f32, usize, u32)> {
