@@ -618,3 +618,6 @@ mod films;
 
 #[path = "fuzz_inputs/serialized.rs"]
 mod serialized;
+
+#[path = "fuzz_inputs/vol.rs"]
+mod vol;

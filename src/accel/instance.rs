@@ -32,11 +32,11 @@ struct Placed {
 /// A node of the top-level BVH: a leaf holds `count > 0` instances from `index` (in
 /// `order`); an interior node's left child follows it and its right child is `index`.
 #[derive(Clone, Copy, Debug)]
-struct TopNode {
-    min: Vec3A,
-    max: Vec3A,
-    index: u32,
-    count: u32,
+pub(super) struct TopNode {
+    pub(super) min: Vec3A,
+    pub(super) max: Vec3A,
+    pub(super) index: u32,
+    pub(super) count: u32,
 }
 
 /// The groups' BVHs and the instances placing them (see the module docs).
@@ -269,7 +269,7 @@ pub fn transformed_bounds(b: &Bounds3, m: &Affine3A) -> Bounds3 {
 
 /// Builds the top-level node over `order[lo..hi]` (median split of the centroids on the
 /// widest axis) and its subtree, depth first; returns its index.
-fn build_top(
+pub(super) fn build_top(
     boxes: &[(Vec3A, Vec3A)],
     order: &mut [u32],
     lo: usize,

@@ -49,6 +49,7 @@ mod collapse;
 mod instance;
 mod leaf;
 mod node;
+mod sdf;
 mod traversal;
 
 use crate::math::{Bounds3, Ray, Vec3};
@@ -60,6 +61,7 @@ use rayon::prelude::*;
 use traversal::*;
 
 pub use instance::{transformed_bounds, Instances};
+pub use sdf::{SdfGrid, SdfShapes, SDF_FIRST_PRIM};
 
 /// Instruction set a BVH's queries run with (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -245,6 +245,8 @@ impl Scene {
         let i = h.prim as usize;
         if i < self.tris.len() {
             self.hit_with(h, self.normals.get(i), self.uvs.get(i))
+        } else if let Some(grid) = self.grid_hit(h) {
+            grid
         } else {
             let (normals, uvs) = self.instanced_attrs(h.prim);
             self.hit_with(h, normals.as_ref(), uvs.as_ref())

@@ -9,11 +9,14 @@
 //! roulette's escape estimate, which read the scene's own triangles, see them only as
 //! occluders of the rays they trace through the scene.
 
+use super::hit::SurfaceHit;
 use super::tri_attr::TriAttr;
 use super::Scene;
 use crate::accel::{Hit, Instances};
 use crate::math::{Bounds3, Ray, Vec2, Vec3};
 use glam::Mat4;
+
+pub mod sdf;
 
 /// A shape group's triangles, in the group's space.
 #[derive(Clone, Debug, Default)]
@@ -24,6 +27,8 @@ pub struct GroupDesc {
     pub normals: Vec<Option<[Vec3; 3]>>,
     pub uvs: Vec<Option<[Vec2; 3]>>,
     pub material: Vec<u32>,
+    /// Signed-distance grids (see [`sdf`]).
+    pub sdfs: Vec<sdf::SdfDesc>,
 }
 
 /// One placement of a group.
@@ -46,6 +51,7 @@ struct GroupAttrs {
 pub struct Instanced {
     pub accel: Instances,
     groups: Vec<GroupAttrs>,
+    sdf: Option<sdf::SdfPart>,
 }
 
 impl Instanced {
@@ -61,6 +67,7 @@ impl Instanced {
         let tris: Vec<&[[Vec3; 3]]> = groups.iter().map(|g| g.positions.as_slice()).collect();
         let placed: Vec<(u32, Mat4)> = instances.iter().map(|i| (i.group, i.to_world)).collect();
         let accel = Instances::build(&tris, &placed, base)?;
+        let sdf = sdf::SdfPart::build(&groups, instances)?;
         let groups = groups
             .into_iter()
             .map(|g| GroupAttrs {
@@ -70,22 +77,32 @@ impl Instanced {
                 material: g.material,
             })
             .collect();
-        Ok(Some(Instanced { accel, groups }))
+        Ok(Some(Instanced { accel, groups, sdf }))
     }
 
     /// The closest hit of the scene's own triangles (`bvh`) and the instances.
     #[inline]
     pub fn closest(&self, bvh: &crate::accel::Bvh, ray: &Ray, t_max: f32) -> Option<Hit> {
         let own = bvh.intersect(ray, t_max);
-        self.accel
+        let best = self
+            .accel
             .intersect(ray, own.map_or(t_max, |h| h.t))
-            .or(own)
+            .or(own);
+        match &self.sdf {
+            None => best,
+            Some(s) => s.accel.intersect(ray, best.map_or(t_max, |h| h.t)).or(best),
+        }
     }
 
     /// Whether the scene's own triangles or an instance stop `ray` before `t_max`.
     #[inline]
     pub fn occluded(&self, bvh: &crate::accel::Bvh, ray: &Ray, t_max: f32) -> bool {
-        bvh.occluded(ray, t_max) || self.accel.occluded(ray, t_max)
+        bvh.occluded(ray, t_max)
+            || self.accel.occluded(ray, t_max)
+            || self
+                .sdf
+                .as_ref()
+                .is_some_and(|s| s.accel.occluded(ray, t_max))
     }
 }
 
@@ -96,7 +113,7 @@ pub fn instance_bounds(groups: &[GroupDesc], instances: &[InstanceDesc]) -> Boun
         .map(|g| {
             let mut b = Bounds3::EMPTY;
             g.positions.iter().flatten().for_each(|p| b.grow(*p));
-            b
+            b.union(&sdf::group_bounds(g))
         })
         .collect();
     let mut b = Bounds3::EMPTY;
@@ -126,12 +143,18 @@ impl Scene {
     #[cold]
     #[inline(never)]
     pub(super) fn instanced_material(&self, prim: u32) -> u32 {
+        if sdf::is_sdf(prim) {
+            return self.sdf_material(prim);
+        }
         let (_, _, g, k) = self.instanced(prim);
         g.material[k]
     }
 
     /// An instanced triangle in world space.
     pub(super) fn instanced_triangle(&self, prim: u32) -> [Vec3; 3] {
+        if sdf::is_sdf(prim) {
+            return [Vec3::ZERO; 3];
+        }
         let (ins, i, g, k) = self.instanced(prim);
         let m = ins.accel.to_world(i);
         g.tris[k].map(|p| m.transform_point3(p))
@@ -139,8 +162,18 @@ impl Scene {
 
     /// An instanced triangle's texture coordinates.
     pub(super) fn instanced_uvs(&self, prim: u32) -> Option<[Vec2; 3]> {
+        if sdf::is_sdf(prim) {
+            return None;
+        }
         let (_, _, g, k) = self.instanced(prim);
         g.uvs.get(k).copied()
+    }
+
+    /// [`Scene::surface_hit`] of a signed-distance grid's hit, None for a triangle's.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn grid_hit(&self, h: Hit) -> Option<SurfaceHit> {
+        sdf::is_sdf(h.prim).then(|| self.sdf_hit(h))
     }
 
     /// The shading normals (moved to world space by the instance's normal matrix) and

@@ -36,6 +36,7 @@ impl<'a> Loader<'a> {
             normals: std::mem::replace(&mut d.normals, saved.1),
             uvs: std::mem::replace(&mut d.uvs, saved.2),
             material: std::mem::replace(&mut d.material, saved.3),
+            sdfs: std::mem::take(&mut self.group_sdfs),
         };
         read?;
         d.groups.push(group);

@@ -54,12 +54,14 @@ mod instance;
 mod properties;
 mod reader;
 mod roughness;
+mod sdfgrid;
 mod sensor;
 mod shape;
 mod spectra;
 #[cfg(test)]
 mod tests;
 mod varying;
+pub mod vol;
 
 use super::camera::{PixelFilter, Projection};
 use super::{
@@ -96,6 +98,8 @@ struct Loader<'a> {
     groups: HashMap<*const El, u32>,
     /// A shapegroup's shapes are being read.
     in_group: bool,
+    /// The signed-distance grids of the shapegroup being read.
+    group_sdfs: Vec<crate::scene::instance::sdf::SdfDesc>,
 }
 
 type R<T> = Result<T, String>;
@@ -207,6 +211,7 @@ fn parse_inner(
         building: RefCell::new(Vec::new()),
         groups: HashMap::new(),
         in_group: false,
+        group_sdfs: Vec::new(),
     };
     // every element with an id, at any depth
     fn collect<'a>(els: &'a [El], ids: &mut HashMap<&'a str, &'a El>) -> R<()> {

@@ -16,19 +16,22 @@ impl<'a> Loader<'a> {
         }
         let supported = matches!(
             kind,
-            "obj" | "ply" | "serialized" | "rectangle" | "cube" | "sphere" | "disk" | "cylinder"
+            "obj"
+                | "ply"
+                | "serialized"
+                | "rectangle"
+                | "cube"
+                | "sphere"
+                | "disk"
+                | "cylinder"
+                | "sdfgrid"
         );
         if !supported {
             self.mark_all(el);
-            let why = if kind == "sdfgrid" {
-                " (signed-distance grids are not supported)"
-            } else {
-                ""
-            };
             self.warn(
                 &format!("shape {kind}"),
                 format!(
-                    "{}: unsupported shape '{kind}'{why}: left out of the scene",
+                    "{}: unsupported shape '{kind}': left out of the scene",
                     el.at
                 ),
             );
@@ -69,6 +72,15 @@ impl<'a> Loader<'a> {
             .map(|b| self.resolve(b).map(|r| r.kind() == "null"))
             .transpose()?
             .unwrap_or(false);
+        if kind == "sdfgrid" {
+            if let Some(e) = emitter_el {
+                return Err(format!(
+                    "{}: an sdfgrid cannot be an area emitter (as in Mitsuba)",
+                    e.at
+                ));
+            }
+            return self.sdfgrid(el, mat);
+        }
         if let Some(e) = emitter_el {
             if e.kind() != "area" {
                 return Err(format!(

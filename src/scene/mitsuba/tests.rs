@@ -182,13 +182,16 @@ fn unsupported_things_are_warned_once_with_the_line() {
         r#"<bsdf type="hair" id="h"/>
            <shape type="cube"><ref id="h"/></shape>
            <shape type="cube"><ref id="h"/><float name="wobble" value="1"/></shape>
-           <shape type="sdfgrid"><string name="filename" value="x.vol"/></shape>"#,
+           <shape type="linearcurve"><string name="filename" value="x.txt"/></shape>"#,
     )
     .unwrap();
     let w = d.warnings.join("\n");
     assert!(w.contains("t.xml:2: unsupported bsdf 'hair'"), "{w}");
     assert!(w.contains("t.xml:4: parameter 'wobble'"), "{w}");
-    assert!(w.contains("t.xml:5: unsupported shape 'sdfgrid'"), "{w}");
+    assert!(
+        w.contains("t.xml:5: unsupported shape 'linearcurve'"),
+        "{w}"
+    );
     assert_eq!(d.warnings.len(), 3, "{w}");
 }
 
