@@ -56,6 +56,8 @@ mod reader;
 mod roughness;
 mod sensor;
 mod shape;
+#[cfg(test)]
+mod shading_tests;
 mod spectra;
 #[cfg(test)]
 mod tests;
