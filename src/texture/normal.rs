@@ -22,7 +22,9 @@
 //! direction wi is weighted by [`Terminator::factor`]: the microfacet shadowing term of
 //! Conty Estevez, Lecocq and Stein (2019), G = 2 / (1 + sqrt(1 + a2 tan^2 theta_i)) with
 //! a2 = min(tan^2(theta_n) / 8, 1), both angles to the smooth shading normal (theta_n
-//! the map's normal's), and 0 where wi is on different sides of the two normals.
+//! the map's normal's), and 0 where wi is on different sides of the two normals. The path
+//! tracer applies it (`Scene::terminator`, to its light samples and continuations); the
+//! other estimators shade with the mapped normal alone.
 
 use super::Texture;
 use crate::math::{Vec2, Vec3};
