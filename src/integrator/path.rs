@@ -292,7 +292,10 @@ impl<const N: usize> PathState<N> {
                 scene, hit.p, ng, &frame, wo_l, &bsdf, &sel, u_sel, u_light, &beta, c,
             );
             if let Some(t) = term {
-                self.shadow = self.shadow.take().map(|(r, t_max, e)| (r, t_max, e * t.factor(r.d)));
+                self.shadow = self
+                    .shadow
+                    .take()
+                    .map(|(r, t_max, e)| (r, t_max, e * t.factor(r.d)));
             }
         }
 

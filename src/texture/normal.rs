@@ -61,7 +61,15 @@ impl NormalMap {
     /// geometric normal `ng` and shading normal `ns` seen from direction `wo` (towards
     /// the ray's origin), with the tangents `dp_du`, `dp_dv` of [`tangents`]; `ns` itself
     /// where the texture gives no direction.
-    pub fn perturb(&self, uv: Vec2, ng: Vec3, ns: Vec3, dp_du: Vec3, dp_dv: Vec3, wo: Vec3) -> Vec3 {
+    pub fn perturb(
+        &self,
+        uv: Vec2,
+        ng: Vec3,
+        ns: Vec3,
+        dp_du: Vec3,
+        dp_dv: Vec3,
+        wo: Vec3,
+    ) -> Vec3 {
         let n = match self {
             NormalMap::Normals(t) => {
                 let c = t.lookup(uv.x, uv.y);
@@ -226,9 +234,29 @@ mod tests {
             let f = Lambert { kd: [0.5; 3] }.eval::<3>(wo_l, wi_l)[0] * wi_l.z.abs();
             let t = Terminator::new(z, np);
             let mask = if t.factor(wi) > 0.0 { 1.0 } else { 0.0 };
-            assert!((f * mask - plain).abs() < 1e-6, "{n:?} {view:?}: {} vs {plain}", f * mask);
+            assert!(
+                (f * mask - plain).abs() < 1e-6,
+                "{n:?} {view:?}: {} vs {plain}",
+                f * mask
+            );
             let g = f * t.factor(wi);
-            assert!((g - shadowed).abs() < 1e-6, "{n:?} {view:?}: {g} vs {shadowed}");
+            assert!(
+                (g - shadowed).abs() < 1e-6,
+                "{n:?} {view:?}: {g} vs {shadowed}"
+            );
         }
+    }
+
+    /// Under a map, an anisotropic lobe's tangent is dp/du made orthogonal to the smooth
+    /// normal first (Mitsuba's sh_frame.s): dp/du = (1, 0, 0.5) over the normal z gives
+    /// (1, 0, 0), whatever the map's normal; the shadowing term is 1 towards the smooth
+    /// normal with an unmapped normal, and 0 below the mapped one.
+    #[test]
+    fn terminator_tangent_and_mask() {
+        let t = Terminator::new(Vec3::Z, Vec3::new(0.6, 0.0, 0.8));
+        let s = t.smooth_tangent(Vec3::new(1.0, 0.0, 0.5));
+        assert!((s - Vec3::X).length() < 1e-6, "{s}");
+        assert_eq!(Terminator::new(Vec3::Z, Vec3::Z).factor(Vec3::Z), 1.0);
+        assert_eq!(t.factor(Vec3::new(-0.9, 0.0, 0.3)), 0.0);
     }
 }

@@ -55,9 +55,9 @@ mod properties;
 mod reader;
 mod roughness;
 mod sensor;
-mod shape;
 #[cfg(test)]
 mod shading_tests;
+mod shape;
 mod spectra;
 #[cfg(test)]
 mod tests;
