@@ -33,22 +33,6 @@ const VARIANCE_FLOOR: f64 = 1e-4;
 /// Scenes that do not pass yet, with the reason.
 const KNOWN_FAILURES: &[(&str, &str)] = &[
     (
-        "test_bumpmap_path",
-        "about 1% of pixel-channels off with the bumps read: Mitsuba's wrapper also flips invalid normals toward the viewer and weights by a shadow-terminator term, which kalos does not; not measured which",
-    ),
-    (
-        "test_constant_path",
-        "0.6% of pixel-channels off since the masks render; not the film filter (the file asks for a box)",
-    ),
-    (
-        "test_normalmap_path",
-        "about 1.5% of pixel-channels off with the normal map read: Mitsuba's wrapper also flips invalid normals toward the viewer and weights by a shadow-terminator term, which kalos does not; not measured which",
-    ),
-    (
-        "test_normalmap_roughconductor_path",
-        "about 1% of pixel-channels off with the anisotropic conductor rendered (its identity normal map passes): the normal map's own residual, as test_normalmap_path",
-    ),
-    (
         "test_texturedprincipled1_path",
         "principled's main lobe is rendered isotropic: the scene's anisotropic is a checkerboard of 0.05 and 0.8 (Mitsuba's alpha_x, alpha_y differ)",
     ),
@@ -57,10 +41,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
         "principled's main lobe is rendered isotropic: the scene's anisotropic is a checkerboard of 0.2 and 0.7 (Mitsuba's alpha_x, alpha_y differ)",
     ),
     ("test_texturedprincipledthin_path", "principledthin BSDF not read"),
-    (
-        "scene_path",
-        "conductor spheres under the museum envmap: about 2% of pixel-channels off",
-    ),
     (
         "test_various_emitters_ptracer",
         "0.82% of pixel-channels off (2026-12-06, 57e90ca): three quarters in image columns 160-223, the three area lights whose radiance is a bitmap (flower.bmp), which kalos renders with the bitmap's mean; the rest single pixels of the dark floor where kalos' path tracer has rare bright samples (the reference is Mitsuba's path tracer: bench/mitsuba-conformance.py renders ptracer files with it)",

@@ -124,7 +124,7 @@ pub fn radiance_batch<const N: usize>(
                 let Some(RayAnswer::Closest(h)) = a.next() else {
                     unreachable!("answers follow the queries")
                 };
-                let hit = h.map(|h| scene.surface_hit(h));
+                let hit = h.map(|h| scene.surface_hit(h, -ray.d));
                 let lane = lanes.as_mut().map(|l| (l, i as u8));
                 p.advance(scene, &ray, hit, s, set, l_tilde, c, lane);
             }
@@ -250,6 +250,12 @@ impl<const N: usize> PathState<N> {
         // The BSDF at the hit, textured, in a frame facing wo for two-sided materials.
         let bsdf = scene.bsdf_at(mat, &hit, wo);
         let Shading { ng, ns, frame } = hit.shading(wo, bsdf.is_two_sided());
+        // a normal or bump map's shadowing term (texture/normal.rs)
+        let term = if scene.normal_maps {
+            scene.terminator(mat, &hit)
+        } else {
+            None
+        };
 
         s.set_dimension(DIMS_CAMERA + (segments - 1) * DIMS_PER_BOUNCE);
         let u_sel = s.next_1d();
@@ -265,7 +271,7 @@ impl<const N: usize> PathState<N> {
         // A diffuse vertex under the BSDF's own sampling ends in the batch's SIMD lanes
         // (one whose light point has an emission table draws it again in `next_event`:
         // the same point, from the same numbers).
-        if let (Some((lanes, path)), Bsdf::Diffuse(lam)) = (lanes, &bsdf) {
+        if let (Some((lanes, path)), Bsdf::Diffuse(lam), None) = (lanes, &bsdf, term) {
             if Lanes::<N>::takes(&sel, rr.mode.uses_estimate()) {
                 if let Some(Chosen::Area(u_area)) = scene.lights.choose(u_sel) {
                     if let Some(ls) = scene.lights.sample_position(u_area, u_light) {
@@ -285,6 +291,12 @@ impl<const N: usize> PathState<N> {
             self.shadow = next_event::<N>(
                 scene, hit.p, ng, &frame, wo_l, &bsdf, &sel, u_sel, u_light, &beta, c,
             );
+            if let Some(t) = term {
+                self.shadow = self
+                    .shadow
+                    .take()
+                    .map(|(r, t_max, e)| (r, t_max, e * t.factor(r.d)));
+            }
         }
 
         // Roulette and continuation (integrator/rr.rs).
@@ -292,7 +304,14 @@ impl<const N: usize> PathState<N> {
         let terminated = matches!(step, Step::Terminated);
         let lt = || l_tilde.at(hit.prim, hit.p, wo.dot(hit.ng) > 0.0);
         self.est = rr.estimate_term(&sel, &bsdf, terminated, &beta, lt);
-        self.continue_with(continuation(hit.p, ng, &frame, step, &beta));
+        let next = continuation(hit.p, ng, &frame, step, &beta);
+        self.continue_with(match term {
+            None => next,
+            Some(t) => next.and_then(|(r, b, pdf, delta)| {
+                let g = t.factor(r.d);
+                (g > 0.0).then_some((r, b * g, pdf, delta))
+            }),
+        });
     }
 
     /// Takes [`continuation`]'s answer: the next segment, or the end of the walk.

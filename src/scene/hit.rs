@@ -93,7 +93,7 @@ impl Scene {
         } else {
             self.closest(ray, t_max)
         };
-        Some(self.surface_hit(h?))
+        Some(self.surface_hit(h?, -ray.d))
     }
 
     /// The BVH's closest hit, instances included.
@@ -142,7 +142,7 @@ impl Scene {
         }
         let mut alpha = m.opacity;
         if let Some(t) = m.opacity_texture {
-            let uv = self.surface_hit(*h).uv;
+            let uv = self.smooth_hit(*h).uv;
             alpha *= self.textures[t as usize].lookup(uv.x, uv.y)[0];
         }
         cutout_u(ray, h.prim) >= alpha
@@ -185,14 +185,15 @@ impl Scene {
     }
 
     /// The shading normal of triangle `prim` at `uv` from its material's normal or bump
-    /// map (`ns` if it has none). (Out of line: scenes without such maps never call it.)
+    /// map (`ns` if it has none), seen from `wo`. (Out of line: scenes without such maps
+    /// never call it.)
     #[inline(never)]
-    fn mapped_normal(&self, prim: u32, uv: Vec2, ng: Vec3, ns: Vec3) -> Vec3 {
+    fn mapped_normal(&self, prim: u32, uv: Vec2, ng: Vec3, ns: Vec3, wo: Vec3) -> Vec3 {
         let Some(map) = &self.material_of(prim).normal_map else {
             return ns;
         };
         let (dp_du, dp_dv) = self.dp_duv(prim, ng);
-        map.perturb(uv, ng, ns, dp_du, dp_dv)
+        map.perturb(uv, ng, ns, dp_du, dp_dv, wo)
     }
 
     /// dp/du and dp/dv of triangle `prim` in Mitsuba's uv, or, without texture coordinates
@@ -209,7 +210,8 @@ impl Scene {
     }
 
     /// `bsdf` with roughness `r` at `hit` seen from `wo`: an anisotropic one turned to the
-    /// tangent of Mitsuba's shading frame (dp/du made orthogonal to the shading normal),
+    /// tangent of Mitsuba's shading frame (dp/du made orthogonal to the shading normal;
+    /// under a normal or bump map, to the smooth one first, then to the mapped one),
     /// given in the local frame [`Shading`] builds for `wo`. (Out of line: materials
     /// without such roughness never call it.)
     #[inline(never)]
@@ -222,7 +224,12 @@ impl Scene {
     ) -> crate::material::Bsdf {
         r.apply(bsdf, hit.uv, || {
             let frame = hit.shading(wo, bsdf.is_two_sided()).frame;
-            let dp_du = self.dp_duv(hit.prim, hit.ng).0;
+            let mut dp_du = self.dp_duv(hit.prim, hit.ng).0;
+            if let Some(t) = self.terminator(self.material_of(hit.prim), hit) {
+                // under a normal or bump map: the smooth frame's tangent (Mitsuba's
+                // sh_frame.s), made orthogonal to the mapped normal below
+                dp_du = t.smooth_tangent(dp_du);
+            }
             let t = dp_du - frame.n * frame.n.dot(dp_du);
             let (c, s) = (t.dot(frame.s), t.dot(frame.t));
             let len = (c * c + s * s).sqrt();
@@ -234,14 +241,26 @@ impl Scene {
         })
     }
 
-    /// The surface information of a BVH hit.
+    /// The surface information of a BVH hit seen from direction `wo` (towards the ray's
+    /// origin: normal and bump maps turn the shading normal to face it).
     ///
     /// A hit on an instance (numbered past the scene's own triangles) asks the instance
     /// for its shading normals and uvs alone, out of line: a call returning the whole
     /// record made the compiler build every hit's record in memory, 24 instructions a
     /// hit more on scenes without instances (callgrind, the furnished room, 2026-12-06).
     #[inline(always)]
-    pub fn surface_hit(&self, h: Hit) -> SurfaceHit {
+    pub fn surface_hit(&self, h: Hit, wo: Vec3) -> SurfaceHit {
+        let mut s = self.smooth_hit(h);
+        if self.normal_maps {
+            s.ns = self.mapped_normal(s.prim, s.uv, s.ng, s.ns, wo);
+        }
+        s
+    }
+
+    /// [`Scene::surface_hit`] before a normal or bump map: the shading normal of the
+    /// triangle's vertex normals.
+    #[inline(always)]
+    fn smooth_hit(&self, h: Hit) -> SurfaceHit {
         let i = h.prim as usize;
         if i < self.tris.len() {
             self.hit_with(h, self.normals.get(i), self.uvs.get(i))
@@ -251,6 +270,28 @@ impl Scene {
             let (normals, uvs) = self.instanced_attrs(h.prim);
             self.hit_with(h, normals.as_ref(), uvs.as_ref())
         }
+    }
+
+    /// Mitsuba's shadowing term of a normal- or bump-mapped `hit` of material `mat` (None
+    /// for other materials): the smooth shading normal under the map's. (Out of line:
+    /// scenes without such maps never call it.)
+    #[inline(never)]
+    pub fn terminator(
+        &self,
+        mat: &crate::material::Material,
+        hit: &SurfaceHit,
+    ) -> Option<crate::texture::normal::Terminator> {
+        mat.normal_map.as_ref()?;
+        let h = Hit {
+            t: hit.t,
+            prim: hit.prim,
+            b1: hit.b1,
+            b2: hit.b2,
+            p: hit.p,
+            n: hit.ng,
+        };
+        let smooth = self.smooth_hit(h).ns;
+        Some(crate::texture::normal::Terminator::new(smooth, hit.ns))
     }
 
     /// [`Scene::surface_hit`] with the hit triangle's shading normals and uvs (in world
@@ -277,11 +318,6 @@ impl Scene {
         let uv = match uvs {
             Some(uv) => uv[0] * b0 + uv[1] * h.b1 + uv[2] * h.b2,
             None => Vec2::new(h.b1, h.b2),
-        };
-        let ns = if self.normal_maps {
-            self.mapped_normal(h.prim, uv, ng, ns)
-        } else {
-            ns
         };
         SurfaceHit {
             p,

@@ -211,10 +211,10 @@ impl<'a> Loader<'a> {
                     }
                     None => ([0.0; 3], [1.0; 3]),
                 };
-                if let Some(e) = self.constant(el, "eta", Use::Unbounded, kind)? {
+                if let Some(e) = self.constant(el, "eta", Use::Ior, kind)? {
                     eta = e;
                 }
-                if let Some(x) = self.constant(el, "k", Use::Unbounded, kind)? {
+                if let Some(x) = self.constant(el, "k", Use::Ior, kind)? {
                     k = x;
                 }
                 let specular = self

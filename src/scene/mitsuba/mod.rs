@@ -56,6 +56,8 @@ mod reader;
 mod roughness;
 mod sdfgrid;
 mod sensor;
+#[cfg(test)]
+mod shading_tests;
 mod shape;
 mod spectra;
 #[cfg(test)]

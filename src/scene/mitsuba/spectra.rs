@@ -8,8 +8,11 @@ use super::*;
 pub(super) enum Use {
     /// Reflectances and other bounded values: the spectrum under D65.
     Reflectance,
-    /// Radiance, intensity, eta, k: an unbounded spectrum (equal-energy white).
+    /// Radiance, intensity: an unbounded spectrum (equal-energy white).
     Unbounded,
+    /// A conductor's eta and k: unbounded, but a constant is that number in every channel
+    /// (Mitsuba's uniform spectrum), not an equal-energy white.
+    Ior,
 }
 
 /// A colour-valued parameter.
@@ -412,7 +415,7 @@ impl<'a> Loader<'a> {
                         };
                         // a constant: a reflectance stays s; emission is equal-energy white
                         return Ok(Color::Rgb(match use_ {
-                            Use::Reflectance => [s; 3],
+                            Use::Reflectance | Use::Ior => [s; 3],
                             Use::Unbounded => spectrum_to_rgb(&[360.0, 830.0], &[s, s], false),
                         }));
                     }

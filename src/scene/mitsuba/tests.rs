@@ -1,6 +1,6 @@
 use super::*;
 
-fn scene(body: &str) -> Result<SceneDesc, String> {
+pub(super) fn scene(body: &str) -> Result<SceneDesc, String> {
     parse(
         &format!("<scene version=\"3.0.0\">\n{body}\n</scene>"),
         "t.xml",
