@@ -8,6 +8,10 @@ use kalos::scene::{mitsuba, Scene};
 use kalos::RenderJob;
 use std::path::Path;
 
+/// Mitsuba's `sdfgrid`, a shape that lives in shape groups like instanced meshes.
+#[path = "instancing/sdfgrid.rs"]
+mod sdfgrid;
+
 const HEAD: &str = r#"<scene version="3.0.0">
     <sensor type="perspective">
         <float name="fov" value="40"/>
