@@ -17,6 +17,7 @@ pub mod albedo;
 pub mod blend;
 pub mod conductor;
 pub mod dielectric;
+mod intern;
 pub mod lambert;
 pub mod microfacet;
 pub mod mirror;
@@ -124,7 +125,11 @@ impl Lobe {
 }
 
 /// The scattering model of a surface.
-#[derive(Clone, Copy, Debug, PartialEq)]
+///
+/// Its size is what every hit moves around, so the common variants (diffuse, plastic,
+/// dielectric, conductor) stay small and a large, rare one (principled's 17 parameters)
+/// lives behind a box.
+#[derive(Clone, Debug, PartialEq)]
 pub enum Bsdf {
     /// Absorbs everything (e.g. a pure emitter with Kd = 0).
     Black,
@@ -144,7 +149,7 @@ pub enum Bsdf {
     /// Mitsuba's `blendbsdf`: two BSDFs blended by a weight.
     Blend(Blend),
     /// Mitsuba's `principled` (Burley's BSDF).
-    Principled(Principled),
+    Principled(Box<Principled>),
 }
 
 /// Luminance of an RGB triple (lobe selection weights).

@@ -96,14 +96,14 @@ impl Varying {
     /// The BSDF of a material whose BSDF is `base` at texture coordinates (u, v), with
     /// `attribute(slot)` the value of a mesh attribute at the hit.
     #[inline]
-    pub fn bsdf(&self, base: Bsdf, u: f32, v: f32, attribute: &dyn Fn(u32) -> [f32; 3]) -> Bsdf {
+    pub fn bsdf(&self, base: &Bsdf, u: f32, v: f32, attribute: &dyn Fn(u32) -> [f32; 3]) -> Bsdf {
         match (self, base) {
-            (Varying::Kd(p), b) => b.with_kd(p.eval(u, v, attribute)),
+            (Varying::Kd(p), b) => b.clone().with_kd(p.eval(u, v, attribute)),
             (Varying::BlendWeight(w), Bsdf::Blend(b)) => {
                 Bsdf::Blend(Blend::new(b.pair, w.eval_1(u, v, attribute)))
             }
-            (Varying::Principled(p), _) => Bsdf::Principled(p.at(u, v, attribute)),
-            (_, b) => b,
+            (Varying::Principled(p), _) => Bsdf::Principled(Box::new(p.at(u, v, attribute))),
+            (_, b) => b.clone(),
         }
     }
 }

@@ -220,8 +220,9 @@ impl Scene {
         hit: &SurfaceHit,
         wo: Vec3,
     ) -> crate::material::Bsdf {
+        let two_sided = bsdf.is_two_sided();
         r.apply(bsdf, hit.uv, || {
-            let frame = hit.shading(wo, bsdf.is_two_sided()).frame;
+            let frame = hit.shading(wo, two_sided).frame;
             let dp_du = self.dp_duv(hit.prim, hit.ng).0;
             let t = dp_du - frame.n * frame.n.dot(dp_du);
             let (c, s) = (t.dot(frame.s), t.dot(frame.t));

@@ -76,5 +76,5 @@ pub(super) fn principled_bsdf(p: &PrincipledParams) -> Result<Bsdf, String> {
     if !p.rates.iter().all(|r| r.is_finite() && *r >= 0.0) {
         return Err("sampling rates must be finite and non-negative".into());
     }
-    Ok(Bsdf::Principled(p.mean()))
+    Ok(Bsdf::Principled(Box::new(p.mean())))
 }
