@@ -16,7 +16,7 @@
 //! (`Anisotropy::tangent`) is set per hit by the scene; directions are turned about the
 //! normal into the tangent's frame and the microfacet model is evaluated there.
 
-use super::microfacet::{reflect, Distribution, Microfacet};
+use super::microfacet::{in_local_frame, in_tangent_frame, reflect, Distribution, Microfacet};
 use super::BsdfSample;
 use crate::spectrum::Spectrum;
 use glam::{Vec2, Vec3};
@@ -57,15 +57,13 @@ impl Anisotropy {
     /// A local direction in the tangent's frame (x along the tangent).
     #[inline]
     fn in_tangent_frame(&self, v: Vec3) -> Vec3 {
-        let [c, s] = self.tangent;
-        Vec3::new(c * v.x + s * v.y, c * v.y - s * v.x, v.z)
+        in_tangent_frame(self.tangent, v)
     }
 
     /// The inverse of [`Anisotropy::in_tangent_frame`].
     #[inline]
     fn in_local_frame(&self, v: Vec3) -> Vec3 {
-        let [c, s] = self.tangent;
-        Vec3::new(c * v.x - s * v.y, s * v.x + c * v.y, v.z)
+        in_local_frame(self.tangent, v)
     }
 }
 

@@ -73,6 +73,21 @@ impl Distribution {
     }
 }
 
+/// A local direction in the frame of a tangent at angle (cos, sin) `tangent` to the local
+/// x axis (x along the tangent, the normal kept): where anisotropic roughness applies.
+#[inline]
+pub fn in_tangent_frame(tangent: [f32; 2], v: Vec3) -> Vec3 {
+    let [c, s] = tangent;
+    Vec3::new(c * v.x + s * v.y, c * v.y - s * v.x, v.z)
+}
+
+/// The inverse of [`in_tangent_frame`].
+#[inline]
+pub fn in_local_frame(tangent: [f32; 2], v: Vec3) -> Vec3 {
+    let [c, s] = tangent;
+    Vec3::new(c * v.x - s * v.y, s * v.x + c * v.y, v.z)
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Microfacet {
     pub dist: Distribution,

@@ -221,18 +221,23 @@ impl Scene {
         wo: Vec3,
     ) -> crate::material::Bsdf {
         let two_sided = bsdf.is_two_sided();
-        r.apply(bsdf, hit.uv, || {
-            let frame = hit.shading(wo, two_sided).frame;
-            let dp_du = self.dp_duv(hit.prim, hit.ng).0;
-            let t = dp_du - frame.n * frame.n.dot(dp_du);
-            let (c, s) = (t.dot(frame.s), t.dot(frame.t));
-            let len = (c * c + s * s).sqrt();
-            if len > 0.0 && len.is_finite() {
-                [c / len, s / len]
-            } else {
-                [1.0, 0.0]
-            }
-        })
+        r.apply(bsdf, hit.uv, || self.tangent_at(hit, wo, two_sided))
+    }
+
+    /// The (cos, sin) of the tangent of Mitsuba's shading frame at `hit` (dp/du made
+    /// orthogonal to the shading normal) in the local frame [`Shading`] builds for `wo`
+    /// (flipped for a two-sided BSDF seen from behind): where anisotropic roughness lies.
+    pub(super) fn tangent_at(&self, hit: &SurfaceHit, wo: Vec3, two_sided: bool) -> [f32; 2] {
+        let frame = hit.shading(wo, two_sided).frame;
+        let dp_du = self.dp_duv(hit.prim, hit.ng).0;
+        let t = dp_du - frame.n * frame.n.dot(dp_du);
+        let (c, s) = (t.dot(frame.s), t.dot(frame.t));
+        let len = (c * c + s * s).sqrt();
+        if len > 0.0 && len.is_finite() {
+            [c / len, s / len]
+        } else {
+            [1.0, 0.0]
+        }
     }
 
     /// The surface information of a BVH hit.

@@ -132,6 +132,7 @@ impl SurfaceModel {
             SurfaceModel::Dielectric { .. } => "dielectric",
             SurfaceModel::ThinDielectric { .. } => "thindielectric",
             SurfaceModel::Blend { .. } => "blendbsdf",
+            SurfaceModel::Principled(p) if p.thin => "principledthin",
             SurfaceModel::Principled(_) => "principled",
         }
     }
@@ -630,7 +631,8 @@ impl Scene {
         }
         if let Some(v) = &mat.varying {
             let attr = |slot| self.attributes.eval(slot, hit.prim, hit.b1, hit.b2);
-            return v.bsdf(&mat.bsdf, hit.uv.x, hit.uv.y, &attr);
+            let tangent = || self.tangent_at(hit, wo, mat.bsdf.is_two_sided());
+            return v.bsdf(&mat.bsdf, (hit.uv.x, hit.uv.y), &attr, &tangent);
         }
         let bsdf = match mat.kd_texture {
             Some(t) => mat
