@@ -26,7 +26,7 @@
 //! are turned about the normal into the tangent's frame, where Mitsuba's formulas apply.
 
 use super::dielectric::fresnel_dielectric;
-use super::microfacet::{in_local_frame, in_tangent_frame, reflect, Distribution, Microfacet};
+use super::microfacet::{reflect, sample_turned, turned, Distribution, Microfacet};
 use super::BsdfSample;
 use crate::sampling::{pdf_cosine_hemisphere, square_to_cosine_hemisphere};
 use crate::spectrum::Spectrum;
@@ -285,10 +285,7 @@ impl Principled {
 
     /// f(wo, wi) (kalos' directions: wo towards the viewer), without the cosine.
     pub fn eval<const N: usize>(&self, wo: Vec3, wi: Vec3) -> Spectrum<N> {
-        let v = match self.frame() {
-            None => self.eval_cos(wo, wi),
-            Some(t) => self.eval_cos(in_tangent_frame(t, wo), in_tangent_frame(t, wi)),
-        };
+        let v = turned(self.frame(), wo, wi, |wo, wi| self.eval_cos(wo, wi));
         Spectrum::from_rgb(v) * (1.0 / wi.z.abs().max(1e-30))
     }
 
@@ -395,10 +392,7 @@ impl Principled {
 
     /// Density of `sample` (kalos' directions).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match self.frame() {
-            None => self.pdf_m(wo, wi),
-            Some(t) => self.pdf_m(in_tangent_frame(t, wo), in_tangent_frame(t, wi)),
-        }
+        turned(self.frame(), wo, wi, |wo, wi| self.pdf_m(wo, wi))
     }
 
     /// Mitsuba's pdf in its naming (directions in the tangent's frame).
@@ -441,14 +435,7 @@ impl Principled {
 
     /// Sample a direction as Mitsuba does (kalos' directions).
     pub fn sample<const N: usize>(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample<N>> {
-        match self.frame() {
-            None => self.sample_m(wo, u_lobe, u),
-            Some(t) => {
-                let mut s = self.sample_m(in_tangent_frame(t, wo), u_lobe, u)?;
-                s.wi = in_local_frame(t, s.wi);
-                Some(s)
-            }
-        }
+        sample_turned(self.frame(), wo, |wo| self.sample_m(wo, u_lobe, u))
     }
 
     /// Mitsuba's sample (directions in the tangent's frame).

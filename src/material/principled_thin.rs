@@ -21,7 +21,7 @@
 //! their mixture. Anisotropy lies along the surface's tangent as principled's.
 
 use super::dielectric::fresnel_dielectric;
-use super::microfacet::{in_local_frame, in_tangent_frame, reflect, Distribution, Microfacet};
+use super::microfacet::{reflect, sample_turned, turned, Distribution, Microfacet};
 use super::principled::{calc_schlick, compatible, dist_params, schlick_r0, schlick_weight, tint};
 use super::BsdfSample;
 use crate::sampling::{pdf_cosine_hemisphere, square_to_cosine_hemisphere};
@@ -143,31 +143,18 @@ impl PrincipledThin {
 
     /// f(wo, wi) (kalos' directions: wo towards the viewer), without the cosine.
     pub fn eval<const N: usize>(&self, wo: Vec3, wi: Vec3) -> Spectrum<N> {
-        let v = match self.frame() {
-            None => self.eval_cos(wo, wi),
-            Some(t) => self.eval_cos(in_tangent_frame(t, wo), in_tangent_frame(t, wi)),
-        };
+        let v = turned(self.frame(), wo, wi, |wo, wi| self.eval_cos(wo, wi));
         Spectrum::from_rgb(v) * (1.0 / wi.z.abs().max(1e-30))
     }
 
     /// Density of `sample` (kalos' directions).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match self.frame() {
-            None => self.pdf_m(wo, wi),
-            Some(t) => self.pdf_m(in_tangent_frame(t, wo), in_tangent_frame(t, wi)),
-        }
+        turned(self.frame(), wo, wi, |wo, wi| self.pdf_m(wo, wi))
     }
 
     /// Sample a direction as Mitsuba does (kalos' directions).
     pub fn sample<const N: usize>(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample<N>> {
-        match self.frame() {
-            None => self.sample_m(wo, u_lobe, u),
-            Some(t) => {
-                let mut s = self.sample_m(in_tangent_frame(t, wo), u_lobe, u)?;
-                s.wi = in_local_frame(t, s.wi);
-                Some(s)
-            }
-        }
+        sample_turned(self.frame(), wo, |wo| self.sample_m(wo, u_lobe, u))
     }
 
     /// Mitsuba's eval: f |cos theta_o|, in Mitsuba's naming (wi = kalos' wo), directions

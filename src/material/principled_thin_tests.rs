@@ -2,9 +2,11 @@
 //! hemispheres) and chi-square tests of its sampling.
 
 use super::*;
-use crate::material::principled::tests::assert_weights_are_f_cos_over_pdf;
+use crate::material::principled::tests::{
+    assert_agrees_with_mitsuba, assert_sampling_follows_pdf, Row,
+};
 use crate::material::Bsdf;
-use crate::sampling::chi2::{assert_chi2, chi2_sphere, TestRng};
+use crate::sampling::chi2::TestRng;
 
 /// The parameter sets of bench/mitsuba-principled-values.py's `THIN_CASES`.
 fn cases() -> [PrincipledThin; 3] {
@@ -44,7 +46,6 @@ fn cases() -> [PrincipledThin; 3] {
 /// Mitsuba 3.9.1's eval (f |cos theta_o|) and pdf, printed by
 /// bench/mitsuba-principled-values.py: (case, wi, wo, eval, pdf), Mitsuba's wi being
 /// kalos' wo.
-type Row = (usize, [f32; 3], [f32; 3], [f32; 3], f32);
 #[rustfmt::skip]
 #[allow(clippy::excessive_precision, clippy::approx_constant)]
 const MITSUBA: &[Row] = &[
@@ -71,24 +72,11 @@ const MITSUBA: &[Row] = &[
 #[test]
 fn principledthin_agrees_with_mitsuba() {
     let cases = cases();
-    for &(k, wi, wo, f, pdf) in MITSUBA {
-        let b = cases[k];
-        let (wi, wo) = (Vec3::from(wi), Vec3::from(wo));
-        let v = b.eval_cos(wi, wo);
-        for c in 0..3 {
-            assert!(
-                (v[c] - f[c]).abs() <= 2e-4 * f[c].abs().max(1e-2),
-                "case {k} wi {wi} wo {wo}: eval {v:?}, Mitsuba {f:?}"
-            );
-        }
-        let p = b.pdf(wi, wo);
-        assert!(
-            (p - pdf).abs() <= 2e-4 * pdf.max(1e-2),
-            "case {k} wi {wi} wo {wo}: pdf {p}, Mitsuba {pdf}"
-        );
-        let e = Bsdf::PrincipledThin(Box::new(b)).eval::<3>(wi, wo);
-        assert!((e[1] * wo.z.abs() - v[1]).abs() <= 1e-5 * v[1].max(1.0));
-    }
+    assert_agrees_with_mitsuba(
+        MITSUBA,
+        |k, wi, wo| cases[k].eval_cos(wi, wo),
+        |k| Bsdf::PrincipledThin(Box::new(cases[k])),
+    );
 }
 
 /// Sampling follows `pdf` (chi-square) from both sides, and its weight is f cos / pdf
@@ -102,32 +90,8 @@ fn chi2_principledthin_sampling() {
             ..b
         };
         let bsdf = Bsdf::PrincipledThin(Box::new(b));
-        for (j, (deg, below)) in [(10.0f32, false), (60.0, false), (35.0, true)]
-            .into_iter()
-            .enumerate()
-        {
-            let t = deg.to_radians();
-            let wo = Vec3::new(
-                t.sin(),
-                0.3 * t.sin(),
-                if below { -t.cos() } else { t.cos() },
-            )
-            .normalize();
-            let r = chi2_sphere(
-                |u1, u2| bsdf.sample::<3>(wo, u1, u2).map(|s| s.wi),
-                |wi| bsdf.pdf(wo, wi),
-                200_000,
-                1700 + (k * 10 + j) as u64,
-            );
-            assert_chi2(&format!("principledthin {k} at {deg} (below {below})"), &r);
-            assert_weights_are_f_cos_over_pdf(
-                &bsdf,
-                wo,
-                &mut rng,
-                &format!("principledthin {k}"),
-                1e-3,
-            );
-        }
+        let name = format!("principledthin {k}");
+        assert_sampling_follows_pdf(&name, &bsdf, 0.3, 1700 + 10 * k as u64, &mut rng);
     }
 }
 
