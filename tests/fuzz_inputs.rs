@@ -457,6 +457,8 @@ const XML: &str = r#"<scene version="3.0.0">
 <emitter type="area"><rgb name="radiance" value="1 2 3"/></emitter></shape>
 <shape type="sphere"><point name="center" x="0" y="1" z="0"/><float name="radius" value="0.5"/>
 <bsdf type="conductor"><string name="material" value="Au"/></bsdf></shape>
+<shape type="sphere"><float name="radius" value="0.2"/><bsdf type="principledthin">
+<float name="anisotropic" value="0.4"/><float name="spec_trans" value="0.5"/><float name="diff_trans" value="0.8"/></bsdf></shape>
 <shape type="disk"><boolean name="flip_normals" value="true"/>
 <bsdf type="mask"><float name="opacity" value="0.3"/><bsdf type="roughdielectric">
 <rgb name="specular_reflectance" value="0.5"/><rgb name="specular_transmittance" value="0.2 0.4 0.6"/>

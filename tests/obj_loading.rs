@@ -228,7 +228,7 @@ fn emitters_mirrors_and_glass_come_from_the_mtl() {
     assert!(s.material_of(0).is_emissive());
     assert_eq!(s.material_of(0).emission, [10.0; 3]);
     assert!(matches!(s.material_of(2).bsdf, Bsdf::Mirror(_)));
-    match s.material_of(3).bsdf {
+    match &s.material_of(3).bsdf {
         Bsdf::Dielectric(g) => assert_eq!(g.eta, 1.33),
         b => panic!("illum 7 gave {b:?}"),
     }
@@ -833,8 +833,8 @@ fn kd_plus_ks_above_one_is_scaled_to_one_with_one_warning() {
     );
     for m in &s.materials {
         let b = match m.kd_texture {
-            Some(t) => m.bsdf.with_kd(s.textures[t as usize].mean()),
-            None => m.bsdf,
+            Some(t) => m.bsdf.clone().with_kd(s.textures[t as usize].mean()),
+            None => m.bsdf.clone(),
         };
         let a = b
             .albedo::<16>()
@@ -849,7 +849,7 @@ fn kd_plus_ks_above_one_is_scaled_to_one_with_one_warning() {
         let _ = Spectrum::<8>::ONE;
     }
     // the ratio Kd : Ks is kept: bright was (0.8 + 0.6) = 1.4 in red
-    match s.material_of(0).bsdf {
+    match &s.material_of(0).bsdf {
         Bsdf::DiffuseGlossy(l, p) => {
             assert!((l.kd[0] / p.ks[0] - 0.8 / 0.6).abs() < 1e-4, "{l:?} {p:?}");
         }
@@ -918,21 +918,21 @@ fn blender_mtl_values_render_as_blender_does() {
     let d = load_with_mtl(&obj, mtl).unwrap();
     let s = scene::Scene::build(d, 0.0).unwrap_or_else(|e| panic!("refused: {e}"));
     for (i, what) in ["Ks 0", "Ni 1", "Ni 0"].iter().enumerate() {
-        match s.material_of(i as u32).bsdf {
+        match &s.material_of(i as u32).bsdf {
             Bsdf::Diffuse(l) => assert_eq!(l.kd, [0.8; 3], "{what}"),
             b => panic!("{what}: {b:?}"),
         }
     }
     // no Ni: Blender 4 keeps IOR 1.5, level 0.5 -> F0 0.04, eta 1.5
-    match s.material_of(3).bsdf {
+    match &s.material_of(3).bsdf {
         Bsdf::Plastic(p) => assert!((p.coat.eta - 1.5).abs() < 1e-4, "{}", p.coat.eta),
         b => panic!("no Ni: {b:?}"),
     }
-    match s.material_of(4).bsdf {
+    match &s.material_of(4).bsdf {
         Bsdf::Plastic(p) => assert!(p.coat.alpha == 0.0 && (p.coat.eta - 1.5).abs() < 1e-4),
         b => panic!("Pr 0: {b:?}"),
     }
-    match s.material_of(5).bsdf {
+    match &s.material_of(5).bsdf {
         Bsdf::Conductor(c) => assert!((c.alpha - 0.04).abs() < 1e-6, "{}", c.alpha),
         b => panic!("Pm 1: {b:?}"),
     }

@@ -164,7 +164,7 @@ pub(crate) enum Kind {
 
 /// A subpath vertex. Densities are per unit area (solid angle converted with the
 /// geometric cosine at the vertex and the squared distance), 0 for Dirac samples.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct Vertex<const N: usize> {
     pub kind: Kind,
     pub p: Vec3,
@@ -365,23 +365,23 @@ fn random_walk<const N: usize>(
             break;
         };
         let mat = scene.material_of(hit.prim);
-        let bsdf = scene.bsdf_at(mat, &hit, -ray.d);
-        let prev = *path.last().unwrap();
         let mut v = Vertex {
             kind: Kind::Surface,
             p: hit.p,
             ng: hit.ng,
             ns: hit.ns,
-            bsdf,
+            bsdf: scene.bsdf_at(mat, &hit, -ray.d),
             light: scene.lights.light_of(hit.prim).unwrap_or(NO_LIGHT),
             beta,
             delta: false,
             pdf_fwd: 0.0,
             pdf_rev: 0.0,
         };
-        v.pdf_fwd = prev.convert(pdf_dir, &v);
+        v.pdf_fwd = path.last().unwrap().convert(pdf_dir, &v);
         path.push(v);
         let i = path.len() - 1;
+        let v = &path[i];
+        let bsdf = &v.bsdf;
         if path.len() >= max_len {
             break;
         }
@@ -394,9 +394,9 @@ fn random_walk<const N: usize>(
         let u_lobe = s.next_1d();
         let u_bsdf = s.next_2d();
         let u_rr = s.next_1d();
-        let sel = rr.select::<N>(i as u32 - 1, &beta, &bsdf);
+        let sel = rr.select::<N>(i as u32 - 1, &beta, bsdf);
         let Step::Continue { sample: bs, scale } =
-            sel.sample::<N>(&bsdf, wo_l, u_lobe, u_bsdf, u_rr)
+            sel.sample::<N>(bsdf, wo_l, u_lobe, u_bsdf, u_rr)
         else {
             break;
         };
@@ -439,8 +439,9 @@ fn random_walk<const N: usize>(
                 },
             )
         };
+        let rev = v.convert(pdf_rev, &path[i - 1]);
         path[i].delta = bs.delta;
-        path[i - 1].pdf_rev = v.convert(pdf_rev, &prev);
+        path[i - 1].pdf_rev = rev;
         if beta.is_black() || !beta.is_finite() {
             break;
         }

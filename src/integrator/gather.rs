@@ -518,8 +518,8 @@ pub fn preview<const N: usize>(
         if mat.is_emissive() && front {
             l += beta * Spectrum::<N>::from_rgb(mat.emitted(wo.dot(hit.ng)));
         }
-        let bsdf = mat.bsdf;
-        if !bsdf.is_delta() || bsdf == Bsdf::Black {
+        let bsdf = &mat.bsdf;
+        if !bsdf.is_delta() || *bsdf == Bsdf::Black {
             if let Some(r) = sol.reflected::<N>(hit.prim, hit.p, front) {
                 l += beta * r;
             }

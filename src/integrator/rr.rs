@@ -690,8 +690,8 @@ impl RadianceEstimate {
             .iter()
             .map(|m| {
                 let bsdf = match m.kd_texture {
-                    Some(t) => m.bsdf.with_kd(textures[t as usize].mean()),
-                    None => m.bsdf,
+                    Some(t) => m.bsdf.clone().with_kd(textures[t as usize].mean()),
+                    None => m.bsdf.clone(),
                 };
                 bsdf.albedo::<3>().0.map(|v| v as f64)
             })

@@ -56,7 +56,7 @@ fn trace<const N: usize>(
         if segments >= max_segments {
             return l;
         }
-        let bsdf = mat.bsdf;
+        let bsdf = &mat.bsdf;
         let Shading { ng, frame, .. } = hit.shading(wo, bsdf.is_two_sided());
         let wo_l = frame.to_local(wo);
         // The next segment's ray from a local direction, if it leaves on the side the

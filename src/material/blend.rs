@@ -15,7 +15,6 @@
 use super::{Bsdf, BsdfSample};
 use crate::spectrum::Spectrum;
 use glam::{Vec2, Vec3};
-use std::sync::{Mutex, OnceLock};
 
 /// The two blended BSDFs and the weight of the second.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,17 +36,7 @@ impl Blend {
 
     /// The shared copy of a pair of BSDFs (made once per distinct pair per process).
     pub fn intern(pair: [Bsdf; 2]) -> &'static [Bsdf; 2] {
-        static PAIRS: OnceLock<Mutex<Vec<&'static [Bsdf; 2]>>> = OnceLock::new();
-        let mut pairs = PAIRS
-            .get_or_init(|| Mutex::new(Vec::new()))
-            .lock()
-            .unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = pairs.iter().find(|p| ***p == pair) {
-            return p;
-        }
-        let p: &'static [Bsdf; 2] = Box::leak(Box::new(pair));
-        pairs.push(p);
-        p
+        super::intern::intern(pair)
     }
 
     #[inline]
@@ -119,14 +108,13 @@ mod tests {
     use crate::sampling::chi2::{assert_chi2, chi2_sphere, TestRng};
 
     fn gold(alpha: f32) -> Bsdf {
-        Bsdf::Conductor(Conductor {
-            eta: [0.143, 0.374, 1.442],
-            k: [3.983, 2.385, 1.603],
-            specular: [1.0; 3],
+        Bsdf::Conductor(Conductor::new(
+            [0.143, 0.374, 1.442],
+            [3.983, 2.385, 1.603],
+            [1.0; 3],
             alpha,
-            dist: Distribution::Ggx,
-            aniso: None,
-        })
+            Distribution::Ggx,
+        ))
     }
 
     fn diffuse(kd: [f32; 3]) -> Bsdf {

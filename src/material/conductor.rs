@@ -16,23 +16,32 @@
 //! (`Anisotropy::tangent`) is set per hit by the scene; directions are turned about the
 //! normal into the tangent's frame and the microfacet model is evaluated there.
 
-use super::microfacet::{reflect, Distribution, Microfacet};
+use super::microfacet::{in_local_frame, in_tangent_frame, reflect, Distribution, Microfacet};
 use super::BsdfSample;
 use crate::spectrum::Spectrum;
 use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Conductor {
-    /// Real part of the relative index of refraction, per RGB channel.
-    pub eta: [f32; 3],
-    /// Imaginary part (absorption), per RGB channel.
-    pub k: [f32; 3],
-    pub specular: [f32; 3],
+    /// The material's optical constants (shared: a conductor is one of the common BSDFs,
+    /// whose size is the `Bsdf` enum's).
+    pub optics: &'static Optics,
     /// Microfacet roughness (alpha_u when anisotropic); 0: the smooth conductor.
     pub alpha: f32,
     pub dist: Distribution,
     /// None: isotropic roughness `alpha`.
     pub aniso: Option<Anisotropy>,
+}
+
+/// A conductor's complex index of refraction eta + i k and reflectance scale, per RGB
+/// channel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Optics {
+    /// Real part of the relative index of refraction.
+    pub eta: [f32; 3],
+    /// Imaginary part (absorption).
+    pub k: [f32; 3],
+    pub specular: [f32; 3],
 }
 
 /// The second roughness of an anisotropic conductor and the frame it applies in.
@@ -48,15 +57,13 @@ impl Anisotropy {
     /// A local direction in the tangent's frame (x along the tangent).
     #[inline]
     fn in_tangent_frame(&self, v: Vec3) -> Vec3 {
-        let [c, s] = self.tangent;
-        Vec3::new(c * v.x + s * v.y, c * v.y - s * v.x, v.z)
+        in_tangent_frame(self.tangent, v)
     }
 
     /// The inverse of [`Anisotropy::in_tangent_frame`].
     #[inline]
     fn in_local_frame(&self, v: Vec3) -> Vec3 {
-        let [c, s] = self.tangent;
-        Vec3::new(c * v.x - s * v.y, s * v.x + c * v.y, v.z)
+        in_local_frame(self.tangent, v)
     }
 }
 
@@ -89,6 +96,23 @@ pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
 }
 
 impl Conductor {
+    /// An isotropic conductor of index eta + i k, reflectance scale `specular` and
+    /// roughness `alpha` (0: smooth).
+    pub fn new(
+        eta: [f32; 3],
+        k: [f32; 3],
+        specular: [f32; 3],
+        alpha: f32,
+        dist: Distribution,
+    ) -> Conductor {
+        Conductor {
+            optics: super::intern::intern(Optics { eta, k, specular }),
+            alpha,
+            dist,
+            aniso: None,
+        }
+    }
+
     #[inline]
     pub fn is_smooth(&self) -> bool {
         self.alpha <= 0.0
@@ -109,7 +133,8 @@ impl Conductor {
     /// specular F(cos) per RGB channel.
     #[inline]
     pub fn reflectance(&self, cos: f32) -> [f32; 3] {
-        std::array::from_fn(|c| self.specular[c] * fresnel_conductor(cos, self.eta[c], self.k[c]))
+        let o = self.optics;
+        std::array::from_fn(|c| o.specular[c] * fresnel_conductor(cos, o.eta[c], o.k[c]))
     }
 
     /// f(wo, wi) of the rough conductor (0 for the smooth one: a Dirac lobe).

@@ -73,6 +73,52 @@ impl Distribution {
     }
 }
 
+/// A local direction in the frame of a tangent at angle (cos, sin) `tangent` to the local
+/// x axis (x along the tangent, the normal kept): where anisotropic roughness applies.
+#[inline]
+pub fn in_tangent_frame(tangent: [f32; 2], v: Vec3) -> Vec3 {
+    let [c, s] = tangent;
+    Vec3::new(c * v.x + s * v.y, c * v.y - s * v.x, v.z)
+}
+
+/// The inverse of [`in_tangent_frame`].
+#[inline]
+pub fn in_local_frame(tangent: [f32; 2], v: Vec3) -> Vec3 {
+    let [c, s] = tangent;
+    Vec3::new(c * v.x - s * v.y, s * v.x + c * v.y, v.z)
+}
+
+/// `f(wo, wi)` with both directions in the frame of `tangent` (unturned where None).
+#[inline]
+pub fn turned<T>(
+    tangent: Option<[f32; 2]>,
+    wo: Vec3,
+    wi: Vec3,
+    f: impl FnOnce(Vec3, Vec3) -> T,
+) -> T {
+    match tangent {
+        None => f(wo, wi),
+        Some(t) => f(in_tangent_frame(t, wo), in_tangent_frame(t, wi)),
+    }
+}
+
+/// A sample `f(wo)` drawn in the frame of `tangent`, its direction turned back.
+#[inline]
+pub fn sample_turned<const N: usize>(
+    tangent: Option<[f32; 2]>,
+    wo: Vec3,
+    f: impl FnOnce(Vec3) -> Option<super::BsdfSample<N>>,
+) -> Option<super::BsdfSample<N>> {
+    match tangent {
+        None => f(wo),
+        Some(t) => {
+            let mut s = f(in_tangent_frame(t, wo))?;
+            s.wi = in_local_frame(t, s.wi);
+            Some(s)
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Microfacet {
     pub dist: Distribution,

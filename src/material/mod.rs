@@ -17,12 +17,14 @@ pub mod albedo;
 pub mod blend;
 pub mod conductor;
 pub mod dielectric;
+mod intern;
 pub mod lambert;
 pub mod microfacet;
 pub mod mirror;
 pub mod phong;
 pub mod plastic;
 pub mod principled;
+pub mod principled_thin;
 pub mod rough_dielectric;
 pub mod roughness;
 mod surface;
@@ -40,6 +42,7 @@ pub use mirror::Mirror;
 pub use phong::Phong;
 pub use plastic::Plastic;
 pub use principled::Principled;
+pub use principled_thin::PrincipledThin;
 pub use rough_dielectric::RoughDielectric;
 pub use thin_dielectric::ThinDielectric;
 
@@ -124,7 +127,11 @@ impl Lobe {
 }
 
 /// The scattering model of a surface.
-#[derive(Clone, Copy, Debug, PartialEq)]
+///
+/// Its size is what every hit moves around, so the common variants (diffuse, plastic,
+/// dielectric, conductor) stay small and a large, rare one (principled's 17 parameters)
+/// lives behind a box.
+#[derive(Clone, Debug, PartialEq)]
 pub enum Bsdf {
     /// Absorbs everything (e.g. a pure emitter with Kd = 0).
     Black,
@@ -144,7 +151,9 @@ pub enum Bsdf {
     /// Mitsuba's `blendbsdf`: two BSDFs blended by a weight.
     Blend(Blend),
     /// Mitsuba's `principled` (Burley's BSDF).
-    Principled(Principled),
+    Principled(Box<Principled>),
+    /// Mitsuba's `principledthin` (Burley's thin-surface BSDF).
+    PrincipledThin(Box<PrincipledThin>),
 }
 
 /// Luminance of an RGB triple (lobe selection weights).
@@ -217,6 +226,7 @@ impl Bsdf {
         match self {
             Bsdf::RoughDielectric(_) => true,
             Bsdf::Principled(p) => p.transmits(),
+            Bsdf::PrincipledThin(p) => p.transmits(),
             Bsdf::Blend(b) => b.pair.iter().any(Bsdf::transmits),
             _ => false,
         }
@@ -274,6 +284,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(d) => d.eval(wo, wi),
             Bsdf::Blend(b) => b.eval(wo, wi),
             Bsdf::Principled(p) => p.eval(wo, wi),
+            Bsdf::PrincipledThin(p) => p.eval(wo, wi),
             _ => Spectrum::ZERO,
         }
     }
@@ -304,6 +315,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(d) => d.pdf(wo, wi),
             Bsdf::Blend(b) => b.pdf(wo, wi),
             Bsdf::Principled(p) => p.pdf(wo, wi),
+            Bsdf::PrincipledThin(p) => p.pdf(wo, wi),
             _ => 0.0,
         }
     }
@@ -342,6 +354,7 @@ impl Bsdf {
             Bsdf::ThinDielectric(d) => d.sample(wo, u_lobe),
             Bsdf::Blend(b) => b.sample(wo, u_lobe, u),
             Bsdf::Principled(p) => p.sample(wo, u_lobe, u),
+            Bsdf::PrincipledThin(p) => p.sample(wo, u_lobe, u),
         }
     }
 
@@ -361,6 +374,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => Spectrum::ONE,
             Bsdf::Blend(b) => b.albedo(),
             Bsdf::Principled(p) => Spectrum::from_rgb(p.albedo_rgb()),
+            Bsdf::PrincipledThin(p) => Spectrum::from_rgb(p.albedo_rgb()),
         }
     }
 }

@@ -19,12 +19,14 @@
 //! brdf r_d, clearcoat r_c / 4, bsdf (1 - F) r_s and (1 - bsdf (1 - F)) r_s normalized
 //! (r_* its `*_sampling_rate`s), on the back F and 1 - F; `pdf` is their mixture.
 //!
-//! The main lobe is isotropic: Mitsuba's anisotropic (alpha_x, alpha_y) = (r^2 / a,
-//! r^2 a), a = sqrt(1 - 0.9 anisotropic), is rendered with their geometric mean r^2 (the
-//! scene reader warns) until the microfacet model has two roughnesses.
+//! The main lobe (reflection and transmission) is anisotropic as Mitsuba's: GGX of
+//! (alpha_x, alpha_y) = (max(0.001, r^2 / a), max(0.001, r^2 a)), a = sqrt(1 - 0.9
+//! anisotropic), alpha_x along the surface's tangent (dp/du made orthogonal to the shading
+//! normal, as Mitsuba's shading frame; `tangent`, set per hit by the scene): directions
+//! are turned about the normal into the tangent's frame, where Mitsuba's formulas apply.
 
 use super::dielectric::fresnel_dielectric;
-use super::microfacet::{reflect, Distribution, Microfacet};
+use super::microfacet::{reflect, sample_turned, turned, Distribution, Microfacet};
 use super::BsdfSample;
 use crate::sampling::{pdf_cosine_hemisphere, square_to_cosine_hemisphere};
 use crate::spectrum::Spectrum;
@@ -50,6 +52,9 @@ pub struct Principled {
     /// Mitsuba's `main_specular_sampling_rate`, `clearcoat_sampling_rate`,
     /// `diffuse_reflectance_sampling_rate`.
     pub rates: [f32; 3],
+    /// (cos, sin) of the tangent's angle to the local frame's x axis: the main lobe's
+    /// alpha_x lies along it (used only where the lobe is anisotropic).
+    pub tangent: [f32; 2],
 }
 
 impl Default for Principled {
@@ -69,6 +74,7 @@ impl Default for Principled {
             spec_trans: 0.0,
             eta: eta_of_specular(0.5),
             rates: [1.0; 3],
+            tangent: [1.0, 0.0],
         }
     }
 }
@@ -184,13 +190,22 @@ fn luminance(c: [f32; 3]) -> f32 {
 
 /// base_color / its luminance (1 where it is black).
 #[inline]
-fn tint(base: [f32; 3]) -> [f32; 3] {
+pub(super) fn tint(base: [f32; 3]) -> [f32; 3] {
     let l = luminance(base);
     if l > 0.0 {
         base.map(|c| c / l)
     } else {
         [1.0; 3]
     }
+}
+
+/// Mitsuba's `calc_dist_params`: GGX's (alpha_x, alpha_y) of a roughness and an
+/// anisotropy.
+#[inline]
+pub fn dist_params(anisotropic: f32, roughness: f32) -> (f32, f32) {
+    let r2 = roughness * roughness;
+    let aspect = (1.0 - 0.9 * anisotropic).sqrt();
+    ((r2 / aspect).max(0.001), (r2 * aspect).max(0.001))
 }
 
 /// Lobe probabilities: (specular reflection, transmission, clearcoat, diffuse).
@@ -200,16 +215,28 @@ impl Principled {
     /// Mitsuba's `calc_dist_params`, the main lobe's (alpha_x, alpha_y).
     #[inline]
     pub fn alphas(&self) -> (f32, f32) {
-        let r2 = self.roughness * self.roughness;
-        let aspect = (1.0 - 0.9 * self.anisotropic).sqrt();
-        ((r2 / aspect).max(0.001), (r2 * aspect).max(0.001))
+        dist_params(self.anisotropic, self.roughness)
     }
 
-    /// The main lobe's distribution (isotropic: see the module's notes).
+    /// The main lobe's GGX distribution, alpha_x along the tangent.
     #[inline]
     fn mf(&self) -> Microfacet {
         let (ax, ay) = self.alphas();
-        Microfacet::new(Distribution::Ggx, (ax * ay).sqrt())
+        Microfacet::anisotropic(Distribution::Ggx, ax, ay)
+    }
+
+    /// The main lobe's roughness differs along the tangent and the bitangent (its frame
+    /// is then the tangent's: `tangent`).
+    #[inline]
+    pub fn is_anisotropic(&self) -> bool {
+        let (ax, ay) = self.alphas();
+        ax != ay
+    }
+
+    /// The tangent where the main lobe is anisotropic (else directions stay local).
+    #[inline]
+    fn frame(&self) -> Option<[f32; 2]> {
+        self.is_anisotropic().then_some(self.tangent)
     }
 
     #[inline]
@@ -258,10 +285,12 @@ impl Principled {
 
     /// f(wo, wi) (kalos' directions: wo towards the viewer), without the cosine.
     pub fn eval<const N: usize>(&self, wo: Vec3, wi: Vec3) -> Spectrum<N> {
-        Spectrum::from_rgb(self.eval_cos(wo, wi)) * (1.0 / wi.z.abs().max(1e-30))
+        let v = turned(self.frame(), wo, wi, |wo, wi| self.eval_cos(wo, wi));
+        Spectrum::from_rgb(v) * (1.0 / wi.z.abs().max(1e-30))
     }
 
-    /// Mitsuba's eval: f |cos theta_o|, in Mitsuba's naming (wi = kalos' wo).
+    /// Mitsuba's eval: f |cos theta_o|, in Mitsuba's naming (wi = kalos' wo), directions
+    /// in the tangent's frame (Mitsuba's shading frame).
     pub fn eval_cos(&self, wi: Vec3, wo: Vec3) -> [f32; 3] {
         let (cos_i, cos_o) = (wi.z, wo.z);
         if cos_i == 0.0 || cos_o == 0.0 || !wo.is_finite() {
@@ -363,10 +392,10 @@ impl Principled {
 
     /// Density of `sample` (kalos' directions).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        self.pdf_m(wo, wi)
+        turned(self.frame(), wo, wi, |wo, wi| self.pdf_m(wo, wi))
     }
 
-    /// Mitsuba's pdf in its naming.
+    /// Mitsuba's pdf in its naming (directions in the tangent's frame).
     fn pdf_m(&self, wi: Vec3, wo: Vec3) -> f32 {
         let cos_i = wi.z;
         if cos_i == 0.0 || wo.z == 0.0 {
@@ -405,13 +434,12 @@ impl Principled {
     }
 
     /// Sample a direction as Mitsuba does (kalos' directions).
-    pub fn sample<const N: usize>(
-        &self,
-        wo_k: Vec3,
-        u_lobe: f32,
-        u: Vec2,
-    ) -> Option<BsdfSample<N>> {
-        let wi = wo_k;
+    pub fn sample<const N: usize>(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample<N>> {
+        sample_turned(self.frame(), wo, |wo| self.sample_m(wo, u_lobe, u))
+    }
+
+    /// Mitsuba's sample (directions in the tangent's frame).
+    fn sample_m<const N: usize>(&self, wi: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample<N>> {
         let cos_i = wi.z;
         if cos_i == 0.0 {
             return None;

@@ -14,15 +14,11 @@ const DISTS: [Distribution; 2] = [Distribution::Ggx, Distribution::Beckmann];
 /// at `angle` radians from the local x axis.
 fn white(dist: Distribution, au: f32, av: f32, angle: f32) -> Bsdf {
     Bsdf::Conductor(Conductor {
-        eta: [0.0; 3],
-        k: [1e4; 3],
-        specular: [1.0; 3],
-        alpha: au,
-        dist,
         aniso: Some(Anisotropy {
             alpha_v: av,
             tangent: [angle.cos(), angle.sin()],
         }),
+        ..Conductor::new([0.0; 3], [1e4; 3], [1.0; 3], au, dist)
     })
 }
 
@@ -128,14 +124,13 @@ fn roughness_follows_the_tangent() {
 
 #[test]
 fn roughness_applies_per_hit() {
-    let iso = Bsdf::Conductor(Conductor {
-        eta: [0.2; 3],
-        k: [3.0; 3],
-        specular: [1.0; 3],
-        alpha: 0.1,
-        dist: Distribution::Ggx,
-        aniso: None,
-    });
+    let iso = Bsdf::Conductor(Conductor::new(
+        [0.2; 3],
+        [3.0; 3],
+        [1.0; 3],
+        0.1,
+        Distribution::Ggx,
+    ));
     // a checkerboard of alpha_u over the uv square, alpha_v constant
     let map = Texture::checkerboard([0.3; 3], [0.05; 3], [2.0, 0.0, 0.0, 0.0, 2.0, 0.0]);
     let r = Roughness {
@@ -143,7 +138,7 @@ fn roughness_applies_per_hit() {
         alpha_v: Alpha::Value(0.05),
     };
     // kalos' v runs up, Mitsuba's down: (0.1, 0.9) is Mitsuba's (0.1, 0.1), color0
-    let at = |u: f32, v: f32| r.apply(iso, crate::math::Vec2::new(u, v), || [0.0, 1.0]);
+    let at = |u: f32, v: f32| r.apply(iso.clone(), crate::math::Vec2::new(u, v), || [0.0, 1.0]);
     match at(0.1, 0.9) {
         Bsdf::Conductor(c) => {
             assert_eq!(c.alpha, 0.3);

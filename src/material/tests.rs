@@ -282,14 +282,13 @@ const BECKMANN: Distribution = Distribution::Beckmann;
 
 fn gold_of(dist: Distribution, alpha: f32) -> Bsdf {
     // Mitsuba's Au at its RGB wavelengths (roughly)
-    Bsdf::Conductor(Conductor {
-        eta: [0.143, 0.374, 1.442],
-        k: [3.983, 2.385, 1.603],
-        specular: [1.0; 3],
+    Bsdf::Conductor(Conductor::new(
+        [0.143, 0.374, 1.442],
+        [3.983, 2.385, 1.603],
+        [1.0; 3],
         alpha,
         dist,
-        aniso: None,
-    })
+    ))
 }
 
 fn gold(alpha: f32) -> Bsdf {
@@ -494,16 +493,8 @@ pub(super) fn energy(b: &Bsdf, wo: Vec3, n: usize, seed: u64) -> (f64, f64) {
 
 #[test]
 fn microfacet_white_furnace() {
-    let white_metal_of = |dist, alpha| {
-        Bsdf::Conductor(Conductor {
-            eta: [0.0; 3],
-            k: [1e4; 3],
-            specular: [1.0; 3],
-            alpha,
-            dist,
-            aniso: None,
-        })
-    };
+    let white_metal_of =
+        |dist, alpha| Bsdf::Conductor(Conductor::new([0.0; 3], [1e4; 3], [1.0; 3], alpha, dist));
     let white_metal = |alpha| white_metal_of(GGX, alpha);
     let cases: Vec<(&str, Bsdf, Option<f64>)> = vec![
         // F = 1: the smooth perfect conductor reflects everything
@@ -528,14 +519,7 @@ fn microfacet_white_furnace() {
         // eta = 1, k = 0: no interface, F = 0, nothing reflected
         (
             "index-matched conductor",
-            Bsdf::Conductor(Conductor {
-                eta: [1.0; 3],
-                k: [0.0; 3],
-                specular: [1.0; 3],
-                alpha: 0.3,
-                dist: GGX,
-                aniso: None,
-            }),
+            Bsdf::Conductor(Conductor::new([1.0; 3], [0.0; 3], [1.0; 3], 0.3, GGX)),
             Some(0.0),
         ),
         ("gold a=0.3", gold(0.3), None),
@@ -722,4 +706,20 @@ fn rough_plastic_lobes_sum_to_the_bsdf() {
             assert!((sum[c] - f[c]).abs() <= 1e-6 * f[c].max(1.0));
         }
     }
+}
+
+/// Every hit moves a `Bsdf` around (built per hit, held per path vertex): the principled
+/// BSDF's 17 parameters behind a box and a conductor's optical constants shared keep it
+/// below the size it had before either existed (48 bytes on 2026-12-05, e91aa28; 72 with
+/// them inline), so that scenes of the common BSDFs do not pay for the rare large ones.
+#[test]
+fn bsdf_stays_small() {
+    let n = std::mem::size_of::<Bsdf>();
+    eprintln!(
+        "size_of Bsdf {n}, Conductor {}, Plastic {}, Principled {}",
+        std::mem::size_of::<Conductor>(),
+        std::mem::size_of::<Plastic>(),
+        std::mem::size_of::<Principled>()
+    );
+    assert!(n <= 40, "Bsdf is {n} bytes");
 }

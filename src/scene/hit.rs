@@ -222,23 +222,29 @@ impl Scene {
         hit: &SurfaceHit,
         wo: Vec3,
     ) -> crate::material::Bsdf {
-        r.apply(bsdf, hit.uv, || {
-            let frame = hit.shading(wo, bsdf.is_two_sided()).frame;
-            let mut dp_du = self.dp_duv(hit.prim, hit.ng).0;
-            if let Some(t) = self.terminator(self.material_of(hit.prim), hit) {
-                // under a normal or bump map: the smooth frame's tangent (Mitsuba's
-                // sh_frame.s), made orthogonal to the mapped normal below
-                dp_du = t.smooth_tangent(dp_du);
-            }
-            let t = dp_du - frame.n * frame.n.dot(dp_du);
-            let (c, s) = (t.dot(frame.s), t.dot(frame.t));
-            let len = (c * c + s * s).sqrt();
-            if len > 0.0 && len.is_finite() {
-                [c / len, s / len]
-            } else {
-                [1.0, 0.0]
-            }
-        })
+        let two_sided = bsdf.is_two_sided();
+        r.apply(bsdf, hit.uv, || self.tangent_at(hit, wo, two_sided))
+    }
+
+    /// The (cos, sin) of the tangent of Mitsuba's shading frame at `hit` (dp/du made
+    /// orthogonal to the shading normal) in the local frame [`Shading`] builds for `wo`
+    /// (flipped for a two-sided BSDF seen from behind): where anisotropic roughness lies.
+    pub(super) fn tangent_at(&self, hit: &SurfaceHit, wo: Vec3, two_sided: bool) -> [f32; 2] {
+        let frame = hit.shading(wo, two_sided).frame;
+        let mut dp_du = self.dp_duv(hit.prim, hit.ng).0;
+        if let Some(t) = self.terminator(self.material_of(hit.prim), hit) {
+            // under a normal or bump map: the smooth frame's tangent (Mitsuba's
+            // sh_frame.s), made orthogonal to the mapped normal below
+            dp_du = t.smooth_tangent(dp_du);
+        }
+        let t = dp_du - frame.n * frame.n.dot(dp_du);
+        let (c, s) = (t.dot(frame.s), t.dot(frame.t));
+        let len = (c * c + s * s).sqrt();
+        if len > 0.0 && len.is_finite() {
+            [c / len, s / len]
+        } else {
+            [1.0, 0.0]
+        }
     }
 
     /// The surface information of a BVH hit seen from direction `wo` (towards the ray's

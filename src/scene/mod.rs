@@ -132,6 +132,7 @@ impl SurfaceModel {
             SurfaceModel::Dielectric { .. } => "dielectric",
             SurfaceModel::ThinDielectric { .. } => "thindielectric",
             SurfaceModel::Blend { .. } => "blendbsdf",
+            SurfaceModel::Principled(p) if p.thin => "principledthin",
             SurfaceModel::Principled(_) => "principled",
         }
     }
@@ -419,13 +420,14 @@ impl Scene {
             } else {
                 (m.ke, None)
             };
+            let one_sided = m.one_sided && bsdf.is_two_sided();
             materials.push(Material {
                 name: m.name.clone(),
                 bsdf,
                 emission,
                 emission_table,
                 kd_texture,
-                one_sided: m.one_sided && bsdf.is_two_sided(),
+                one_sided,
                 opacity: m.opacity.min(1.0),
                 opacity_texture,
                 normal_map: m.normal_map.clone(),
@@ -628,13 +630,15 @@ impl Scene {
         }
         if let Some(v) = &mat.varying {
             let attr = |slot| self.attributes.eval(slot, hit.prim, hit.b1, hit.b2);
-            return v.bsdf(mat.bsdf, hit.uv.x, hit.uv.y, &attr);
+            let tangent = || self.tangent_at(hit, wo, mat.bsdf.is_two_sided());
+            return v.bsdf(&mat.bsdf, (hit.uv.x, hit.uv.y), &attr, &tangent);
         }
         let bsdf = match mat.kd_texture {
             Some(t) => mat
                 .bsdf
+                .clone()
                 .with_kd(self.textures[t as usize].lookup(hit.uv.x, hit.uv.y)),
-            None => mat.bsdf,
+            None => mat.bsdf.clone(),
         };
         match &mat.roughness {
             None => bsdf,
@@ -665,14 +669,7 @@ pub fn bsdf_of_model(model: &SurfaceModel, kd: [f32; 3]) -> Result<Bsdf, String>
             if !alpha_ok(alpha) {
                 return Err(format!("alpha {alpha}: must be in [0, 4]"));
             }
-            Bsdf::Conductor(Conductor {
-                eta,
-                k,
-                specular,
-                alpha,
-                dist: distribution,
-                aniso: None,
-            })
+            Bsdf::Conductor(Conductor::new(eta, k, specular, alpha, distribution))
         }
         SurfaceModel::Plastic {
             eta,

@@ -40,7 +40,7 @@ pub(super) fn varying_of(
         (Some(SurfaceModel::Blend { weight, .. }), _) if !weight.is_const() => {
             Varying::BlendWeight(resolve(weight, attrs)?)
         }
-        (Some(SurfaceModel::Principled(p)), _) if !p.is_const() => {
+        (Some(SurfaceModel::Principled(p)), _) if !p.is_const() || p.is_anisotropic() => {
             Varying::Principled(Box::new(p.try_map(|x| resolve(x, attrs))?))
         }
         (_, Some(a)) => Varying::Kd(resolve(&Param::Attribute(a.clone()), attrs)?),
@@ -76,5 +76,5 @@ pub(super) fn principled_bsdf(p: &PrincipledParams) -> Result<Bsdf, String> {
     if !p.rates.iter().all(|r| r.is_finite() && *r >= 0.0) {
         return Err("sampling rates must be finite and non-negative".into());
     }
-    Ok(Bsdf::Principled(p.mean()))
+    Ok(p.mean())
 }

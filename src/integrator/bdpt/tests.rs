@@ -50,7 +50,7 @@ fn mis_weights_of_a_path_sum_to_one() {
             if connect(&scene, &cam, &light, &camp, s0, t0, &mut rs, &mut c).is_none() {
                 continue;
             }
-            x.extend(light[..s0].iter().rev().copied());
+            x.extend(light[..s0].iter().rev().cloned());
         }
         let n = x.len();
         if n == 2 {
@@ -58,26 +58,32 @@ fn mis_weights_of_a_path_sum_to_one() {
         }
         // Both roles of every point: camera side (A) and light side (B).
         let as_surface = |v: &Vertex<3>| -> Vertex<3> {
-            let mut v = *v;
+            let mut v = v.clone();
             if v.kind == Kind::Light {
                 let tri = scene.lights.get(v.light).tri;
                 v.kind = Kind::Surface;
-                v.bsdf = scene.material_of(tri).bsdf;
+                v.bsdf = scene.material_of(tri).bsdf.clone();
             }
             v
         };
         let a: Vec<Vertex<3>> = (0..n)
-            .map(|i| if i == 0 { x[0] } else { as_surface(&x[i]) })
+            .map(|i| {
+                if i == 0 {
+                    x[0].clone()
+                } else {
+                    as_surface(&x[i])
+                }
+            })
             .collect();
         let b: Vec<Vertex<3>> = (0..n)
             .map(|i| {
                 if i == n - 1 {
-                    let mut v = x[n - 1];
+                    let mut v = x[n - 1].clone();
                     v.kind = Kind::Light;
                     v.pdf_fwd = scene.lights.pdf_position(v.light);
                     v
                 } else {
-                    a[i]
+                    a[i].clone()
                 }
             })
             .collect();
@@ -115,7 +121,7 @@ fn mis_weights_of_a_path_sum_to_one() {
                 let ss = n - tt;
                 let cp: Vec<Vertex<3>> = (0..tt)
                     .map(|i| {
-                        let mut v = a[i];
+                        let mut v = a[i].clone();
                         v.pdf_fwd = pc[i];
                         v.pdf_rev = pl[i];
                         v
@@ -124,16 +130,16 @@ fn mis_weights_of_a_path_sum_to_one() {
                 let lp: Vec<Vertex<3>> = (0..ss)
                     .map(|j| {
                         let i = n - 1 - j;
-                        let mut v = b[i];
+                        let mut v = b[i].clone();
                         v.pdf_fwd = pl[i];
                         v.pdf_rev = pc[i];
                         v
                     })
                     .collect();
                 let sampled = if ss == 1 {
-                    Some(lp[0])
+                    Some(lp[0].clone())
                 } else if tt == 1 {
-                    Some(cp[0])
+                    Some(cp[0].clone())
                 } else {
                     None
                 };

@@ -369,19 +369,8 @@ impl<'a> Loader<'a> {
                     return Ok(im);
                 }
             }
-            "principled" => self.principled(el, &mut m)?,
-            "principledthin" => {
-                let c = self.color(el, "base_color", Use::Reflectance)?;
-                self.set_diffuse(&mut m, c, 0.5);
-                self.mark_all(el);
-                self.warn(
-                    &format!("bsdf {kind}"),
-                    format!(
-                        "{}: unsupported bsdf '{kind}': rendered as diffuse base_color",
-                        el.at
-                    ),
-                );
-            }
+            "principled" => self.principled(el, &mut m, false)?,
+            "principledthin" => self.principled(el, &mut m, true)?,
             "null" => {
                 m.kd = [0.0; 3];
                 m.notes

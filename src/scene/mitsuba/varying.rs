@@ -67,11 +67,11 @@ impl<'a> Loader<'a> {
         Ok(d)
     }
 
-    /// `principled`: its parameters (values, textures or mesh attributes), `eta` or
-    /// `specular`, the sampling rates.
-    pub(super) fn principled(&self, el: &'a El, m: &mut MaterialDesc) -> R<()> {
+    /// `principled` (or `principledthin` when `thin`): its parameters (values, textures or
+    /// mesh attributes), `eta` or `specular` (principledthin: `eta`), the sampling rates.
+    pub(super) fn principled(&self, el: &'a El, m: &mut MaterialDesc, thin: bool) -> R<()> {
         use crate::material::principled::eta_of_specular;
-        use crate::material::varying::{PrincipledParams, PRINCIPLED_VALUES};
+        use crate::material::varying::{PrincipledParams, NOT_THIN, PRINCIPLED_VALUES};
         let param = |name: &str, default: f32| -> R<Param> {
             match self.color(el, name, Use::Unbounded)? {
                 None => Ok(Param::Const([default; 3])),
@@ -81,14 +81,25 @@ impl<'a> Loader<'a> {
         let base_color = param("base_color", 0.5)?;
         let mut values = Vec::new();
         for (name, default) in PRINCIPLED_VALUES {
-            values.push(param(name, default)?);
+            let theirs = if thin {
+                !NOT_THIN.contains(&name)
+            } else {
+                name != "diff_trans"
+            };
+            values.push(if theirs {
+                param(name, default)?
+            } else {
+                Param::Const([default; 3])
+            });
         }
-        let values: [Param; 10] = values.try_into().expect("ten values");
+        let values: [Param; 11] = values.try_into().expect("eleven values");
         // Mitsuba's flag: spec_trans given and not a float 0
         let spec_trans = &values[9];
         let has_trans =
             self.prop(el, "spec_trans").is_some() && *spec_trans != Param::Const([0.0; 3]);
+        let kind = if thin { "principledthin" } else { "principled" };
         let eta = match (self.float(el, "eta")?, self.float(el, "specular")?) {
+            (e, _) if thin => e.unwrap_or(1.5),
             (Some(_), Some(_)) => {
                 return Err(format!(
                     "{}: principled: give either eta or specular, not both",
@@ -104,34 +115,37 @@ impl<'a> Loader<'a> {
         };
         if !(eta.is_finite() && eta > 0.0) {
             return Err(format!(
-                "{}: principled: eta {eta}: must be a positive number",
+                "{}: {kind}: eta {eta}: must be a positive number",
                 el.at
             ));
         }
-        let mut rates = [1.0f32; 3];
-        for (r, name) in rates.iter_mut().zip([
-            "main_specular_sampling_rate",
-            "clearcoat_sampling_rate",
-            "diffuse_reflectance_sampling_rate",
-        ]) {
+        let mut rates = [1.0f32; 4];
+        let rate_names = if thin {
+            [
+                "specular_reflectance_sampling_rate",
+                "specular_transmittance_sampling_rate",
+                "diffuse_reflectance_sampling_rate",
+                "diffuse_transmittance_sampling_rate",
+            ]
+        } else {
+            [
+                "main_specular_sampling_rate",
+                "clearcoat_sampling_rate",
+                "diffuse_reflectance_sampling_rate",
+                "",
+            ]
+        };
+        for (r, name) in rates.iter_mut().zip(rate_names) {
             if let Some(v) = self.float(el, name)? {
                 *r = v;
             }
-        }
-        if values[1] != Param::Const([0.0; 3]) {
-            self.warn(
-                "principled anisotropic",
-                format!(
-                    "{}: principled anisotropic: rendered isotropic (the main lobe's roughness is the geometric mean of Mitsuba's alpha_x, alpha_y)",
-                    el.at
-                ),
-            );
         }
         let p = PrincipledParams {
             base_color,
             values,
             eta,
             rates,
+            thin,
         };
         m.kd = p.base_color.mean();
         m.model = Some(SurfaceModel::Principled(Box::new(p)));
@@ -178,6 +192,10 @@ impl<'a> Loader<'a> {
         Ok(m)
     }
 }
+
+#[cfg(test)]
+#[path = "principled_tests.rs"]
+mod principled_tests;
 
 #[cfg(test)]
 mod tests {
