@@ -56,9 +56,11 @@
 //! unbiased whatever the solution's error. It gathers at the `gather_depth`-th diffuse
 //! vertex only.
 //!
-//! Known approximations of the lookup, both of the radiosity solution: B is the diffuse (Kd) part only,
-//! so the glossy reflection of a receiver y is missing from the lookup; and B is the mesh's
-//! interpolation. Both biases fall with glossiness and element size. BRDF lobe selection
+//! Known approximations of the lookup, both of the radiosity solution: B reflects a receiver
+//! y's light as if diffusely (a diffuse + Phong y carries its Phong lobe's albedo, so the
+//! power is right and only its direction is averaged; other glossy materials are not
+//! meshed); and B is the mesh's interpolation. Both biases fall with glossiness and element
+//! size. BRDF lobe selection
 //! must be `Mixture`, `Static` or `Mis` (their weights are proportional to f, so the split
 //! by f_d / f is exact); `Decompose` (W_i = w_i / p_i) is not split correctly.
 //!

@@ -12,7 +12,9 @@
 //!   on a scene triangle the reflected radiance (B - E) / pi, or B / pi.
 //! - `ply`: the meshed solution as a vertex-coloured PLY (MeshLab, Blender).
 //!
-//! Only the diffuse reflectance (Kd, a texture by its mean) takes part: glossy lobes,
+//! Only materials with a diffuse lobe take part, with the diffuse reflectance (Kd, a texture
+//! by its mean) plus, for a diffuse + Phong material, the Phong lobe's hemispherical albedo
+//! carried as if diffuse (`diffuse_kd`); other glossy materials,
 //! mirrors and glass are not meshed and only block diffuse transfer (the path tracer
 //! follows them), except that an emitter's shot also reaches receivers through the
 //! scene's planar ideal mirrors (`Bsdf::Mirror` triangles; first order, mirror-image
