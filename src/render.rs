@@ -102,9 +102,11 @@ pub struct RenderJob {
     /// radiosity with --method rw (where the scene allows a solution), else off.
     #[arg(long, value_enum)]
     pub gather: Option<Gather>,
-    /// Diffuse reflections before the gather looks up (1: the paper's first diffuse bounce).
-    #[arg(long, default_value_t = 1)]
-    pub gather_depth: u32,
+    /// Diffuse reflections before the gather looks up (1: the paper's first diffuse
+    /// bounce). Default: chosen by a pilot under --method rw (the depth whose predicted
+    /// error at the budget is least), else 1.
+    #[arg(long)]
+    pub gather_depth: Option<u32>,
     /// Rays each gather point casts for its diffuse lookup (Chen et al.'s final gather; 1:
     /// the paper's one path per trial).
     #[arg(long, default_value_t = crate::integrator::gather::DEFAULT_GATHER_RAYS)]

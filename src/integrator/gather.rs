@@ -79,6 +79,9 @@ use crate::scene::{Scene, Shading};
 use crate::spectrum::Spectrum;
 use glam::Vec2;
 
+/// The gather's depth unless `--gather-depth` says or `--method rw` chooses it (the paper's
+/// first diffuse bounce).
+pub const DEFAULT_GATHER_DEPTH: u32 = 1;
 /// Gather rays per gather vertex unless `--gather-rays` says (measured: docs/results/rushmeier-ward.md).
 pub const DEFAULT_GATHER_RAYS: u32 = 2;
 /// More gather rays than this are refused.

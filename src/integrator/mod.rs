@@ -47,8 +47,10 @@ pub struct IntegratorSettings {
     pub roulette: Roulette,
     /// The path tracer's diffuse indirect light: traced, or from a radiosity solution.
     pub gather: Gather,
-    /// Diffuse reflections traced before the gather looks up (1: the paper's first bounce).
-    pub gather_depth: u32,
+    /// Diffuse reflections traced before the gather looks up (1: the paper's first bounce);
+    /// None: `--method rw` chooses it from a pilot (`pipeline::rw_depth`), else
+    /// `gather::DEFAULT_GATHER_DEPTH`.
+    pub gather_depth: Option<u32>,
     /// Rays per gather vertex for the diffuse lookup (1: the paper's one path per trial).
     pub gather_rays: u32,
     /// The radiosity preprocess (for `--gather radiosity` and `--integrator radiosity`).
@@ -64,7 +66,7 @@ impl Default for IntegratorSettings {
             max_depth: -1,
             roulette: Roulette::default(),
             gather: Gather::Off,
-            gather_depth: 1,
+            gather_depth: None,
             gather_rays: gather::DEFAULT_GATHER_RAYS,
             radiosity: RadiositySettings::default(),
             mis: MisHeuristic::Balance,
@@ -196,7 +198,7 @@ impl Integrator {
                 ));
             }
         }
-        if set.gather_depth == 0 {
+        if set.gather_depth == Some(0) {
             return Err("--gather-depth: must be at least 1 (the first diffuse bounce)".into());
         }
         if !(1..=gather::MAX_GATHER_RAYS).contains(&set.gather_rays) {
@@ -491,7 +493,9 @@ impl Integrator {
                         ray,
                         s,
                         &self.set,
-                        self.set.gather_depth,
+                        self.set
+                            .gather_depth
+                            .unwrap_or(gather::DEFAULT_GATHER_DEPTH),
                         &l_tilde(),
                         c,
                     )

@@ -8,6 +8,7 @@ pub mod dtf;
 pub mod render;
 pub mod rw;
 pub mod rw_bias;
+pub mod rw_depth;
 pub mod strategies;
 
 pub use crate::progress::{Progress, Silent};

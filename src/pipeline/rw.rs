@@ -31,7 +31,7 @@
 //! the ceiling the rest goes to every pixel).
 
 use super::render::{render_pass, render_pass_split, Counts, Pass, RenderSettings};
-use super::rw_bias;
+use super::{rw_bias, rw_depth};
 use crate::film::Film;
 use crate::filter::energy::{
     self, converged, deviation, EnergyOutput, EnergyParams, Pilot, CEILING_FACTOR, PILOT_TRIALS,
@@ -184,6 +184,11 @@ pub struct RwStats {
     /// Standard error of the image mean's luminance the correction adds (its noise).
     pub correction_se: f64,
     pub pilot_seconds: f64,
+    /// The gather's depth, and why (`rw_depth`; empty when it was named or not chosen),
+    /// with the seconds its pilot took.
+    pub gather_depth: u32,
+    pub gather_depth_choice: String,
+    pub gather_depth_seconds: f64,
     pub trials_seconds: f64,
     pub filter_seconds: f64,
 }
@@ -352,7 +357,36 @@ pub fn render_rw(
     let t0 = Instant::now();
     let pixels = set.width as usize * set.height as usize;
 
+    // 0. The gather's depth, unless named: the one a pilot predicts the least error for.
+    let depth_budget = match budget {
+        RwBudget::Spp(spp) => Some(rw_depth::TrialBudget::PerPixel(spp)),
+        RwBudget::Time(secs) => Some(rw_depth::TrialBudget::Seconds {
+            seconds: secs,
+            pixels: pixels as f64,
+        }),
+        RwBudget::Convergence => None,
+    };
+    let mut chosen = integrator.clone();
+    let depth_choice = match depth_budget {
+        Some(b)
+            if integrator.set.gather.reads_solution() && integrator.set.gather_depth.is_none() =>
+        {
+            rw_depth::choose(scene, integrator, set, b, progress)?
+        }
+        _ => None,
+    };
+    if let Some(c) = &depth_choice {
+        chosen.set.gather_depth = Some(c.depth);
+        progress.message(&c.line);
+    }
+    let integrator = &chosen;
+    let gather_depth = integrator
+        .set
+        .gather_depth
+        .unwrap_or(crate::integrator::gather::DEFAULT_GATHER_DEPTH);
+
     // 1. The pilot: same camera and estimator at PILOT_RES^2, stream 1.
+    let t_pilot = Instant::now();
     let mut pset = *set;
     pset.width = params.pilot_res;
     pset.height = params.pilot_res;
@@ -389,7 +423,7 @@ pub fn render_rw(
     let pmean = sum_means(&pfilm, split.then_some(&pvis));
     let ps: Vec<f64> = pfilm.pixels.iter().map(deviation).collect();
     let pilot = energy::pilot_of(&pmean, &ps, params.d)?;
-    let pilot_seconds = t0.elapsed().as_secs_f64();
+    let pilot_seconds = t_pilot.elapsed().as_secs_f64();
     // Each pilot pixel's predicted need, (t S / (D unit))^2, read with the statistic the
     // stopping test will read (the pooled 3x3 deviation unless --rw-pixel-test) and the
     // display unit at the pixel's level: the prediction is of the test that is applied.
@@ -420,7 +454,7 @@ pub fn render_rw(
         RwBudget::Time(secs) => {
             let rate = (pilot_pixels * PILOT_TRIALS as u64) as f64 / pilot_seconds.max(1e-9);
             // keep ~2% for the filter
-            let left = (secs * 0.98 - pilot_seconds).max(0.0);
+            let left = (secs * 0.98 - t0.elapsed().as_secs_f64()).max(0.0);
             let spp = rate * left / pixels as f64;
             (
                 mt_for_budget(&needs, spp * trial_share),
@@ -689,6 +723,12 @@ pub fn render_rw(
         correction_alpha,
         correction_se,
         pilot_seconds,
+        gather_depth,
+        gather_depth_choice: depth_choice
+            .as_ref()
+            .map(|c| c.line.clone())
+            .unwrap_or_default(),
+        gather_depth_seconds: depth_choice.as_ref().map_or(0.0, |c| c.seconds),
         trials_seconds,
         filter_seconds,
     };

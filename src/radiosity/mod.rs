@@ -36,6 +36,7 @@ use crate::progress::Progress;
 use crate::scene::Scene;
 use crate::spectrum::Spectrum;
 use mesh::Mesh;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A point found in the mesh: its triangle's meshing, its element's cell index there and
@@ -169,6 +170,10 @@ pub struct Solution {
     /// triangles that are not meshed).
     pub tri_e: Vec<Vec<f32>>,
     pub stats: RadiosityStats,
+    /// The coarse solution `compute` solved first (`ROULETTE_ELEMENTS`) when it then
+    /// refined the mesh: the gather's depth is chosen from how the two differ
+    /// (`pipeline::rw_depth`).
+    pub coarser: Option<Arc<Solution>>,
 }
 
 /// Uplift a linear RGB triple to `bands` bands as the path tracer does.
@@ -234,12 +239,69 @@ fn mirrors_of(scene: &Scene, bands: usize) -> Result<Vec<solve::MirrorTri>, Stri
     Ok(out)
 }
 
+/// The triangles the solution meshes: their reflectance (None: not diffuse-like) and area
+/// (None: not meshed), the meshed area, and whether any is diffuse-like.
+struct Meshed {
+    kd: Vec<Option<[f32; 3]>>,
+    areas: Vec<Option<f64>>,
+    area_total: f64,
+    any_diffuse: bool,
+}
+
+impl Meshed {
+    fn of(scene: &Scene) -> Meshed {
+        let nt = scene.tris.len();
+        let mut m = Meshed {
+            kd: Vec::with_capacity(nt),
+            areas: Vec::with_capacity(nt),
+            area_total: 0.0,
+            any_diffuse: false,
+        };
+        let rho_of: Vec<Option<[f32; 3]>> = (0..scene.materials.len() as u32)
+            .map(|k| diffuse_kd(scene, k))
+            .collect();
+        for (t, tri) in scene.tris.iter().enumerate() {
+            let mat = scene.tri_material[t];
+            let d = rho_of[mat as usize];
+            m.any_diffuse |= d.is_some();
+            let meshed = d.is_some() || scene.materials[mat as usize].is_emissive();
+            let a = 0.5 * (tri[1] - tri[0]).cross(tri[2] - tri[0]).length() as f64;
+            if meshed {
+                m.area_total += a;
+            }
+            m.areas.push(meshed.then_some(a));
+            m.kd.push(d);
+        }
+        m
+    }
+
+    /// Elements of the mesh whose largest element is the meshed area / `default_elements`.
+    fn elements(&self, default_elements: f64) -> u64 {
+        mesh::count(&levels_for(&self.areas, self.area_total / default_elements)).0
+    }
+}
+
+/// Each meshed triangle's subdivision level for elements of at most `max_area`.
+fn levels_for(areas: &[Option<f64>], max_area: f64) -> Vec<Option<u32>> {
+    areas
+        .iter()
+        .map(|a| a.map(|a| mesh::level_for(a, max_area)))
+        .collect()
+}
+
+/// A refined solution keeps its coarse one (`Solution::coarser`) only with at least this
+/// many times its elements: the gather's depth is chosen from how the two differ, which
+/// says little of meshes almost alike (a scene of many small triangles, one element each).
+pub const MIN_REFINEMENT: f64 = 2.25;
+
 impl Solution {
     /// Mesh the scene and solve on `bands` bands (3, 8 or 16). With a time budget and the
     /// default mesh, a coarse solution (`ROULETTE_ELEMENTS`) is solved first and timed; the
     /// mesh is then refined as far as `PREPROCESS_SHARE` of the budget allows at the
     /// solver's measured rate (time ~ elements^2), never past the default mesh; the coarse
-    /// solution is kept when refining would not give half as many elements again.
+    /// solution is kept when refining would not give half as many elements again. Without a
+    /// budget the default mesh is solved after the coarse one (a few thousandths of its
+    /// time). The refined solution keeps the coarse one (`coarser`).
     pub fn compute(
         scene: &Scene,
         set: &RadiositySettings,
@@ -247,10 +309,17 @@ impl Solution {
         progress: &dyn Progress,
     ) -> Result<Solution, String> {
         let budget = set.time_budget.filter(|t| t.is_finite() && *t > 0.0);
-        let (Some(seconds), None) = (budget, set.max_area) else {
+        if set.max_area.is_some() || set.default_elements <= ROULETTE_ELEMENTS {
             return Self::compute_mesh(scene, set, bands, progress);
+        }
+        // element counts are cheap (no solve): a coarse solve that the default mesh would
+        // hardly refine is not made without a budget
+        let meshed = Meshed::of(scene);
+        let n_coarse = meshed.elements(ROULETTE_ELEMENTS) as f64;
+        let refines = |default_elements: f64| {
+            meshed.elements(default_elements) as f64 >= MIN_REFINEMENT * n_coarse
         };
-        if set.default_elements <= ROULETTE_ELEMENTS {
+        if budget.is_none() && !refines(set.default_elements) {
             return Self::compute_mesh(scene, set, bands, progress);
         }
         let coarse_set = RadiositySettings {
@@ -258,17 +327,28 @@ impl Solution {
             ..*set
         };
         let coarse = Self::compute_mesh(scene, &coarse_set, bands, progress)?;
-        let t0 = coarse.stats.seconds.max(1e-3);
-        let left = PREPROCESS_SHARE * seconds - t0;
-        let elements = ROULETTE_ELEMENTS * (left.max(0.0) / t0).sqrt();
-        if elements < 1.5 * ROULETTE_ELEMENTS {
+        let elements = match budget {
+            Some(seconds) => {
+                let t0 = coarse.stats.seconds.max(1e-3);
+                let left = PREPROCESS_SHARE * seconds - t0;
+                ROULETTE_ELEMENTS * (left.max(0.0) / t0).sqrt()
+            }
+            None => set.default_elements,
+        }
+        .min(set.default_elements);
+        if elements < 1.5 * ROULETTE_ELEMENTS || (meshed.elements(elements) as f64) < 1.5 * n_coarse
+        {
             return Ok(coarse);
         }
         let fine_set = RadiositySettings {
-            default_elements: elements.min(set.default_elements),
+            default_elements: elements,
             ..*set
         };
-        Self::compute_mesh(scene, &fine_set, bands, progress)
+        let mut fine = Self::compute_mesh(scene, &fine_set, bands, progress)?;
+        if refines(elements) {
+            fine.coarser = Some(Arc::new(coarse));
+        }
+        Ok(fine)
     }
 
     /// Mesh the scene at the settings' element area and solve.
@@ -283,26 +363,13 @@ impl Solution {
         // errors name the scene as the user gave it (its path)
         let name = &scene.info.source;
         // --- which triangles take part, at which level
+        let Meshed {
+            kd,
+            areas,
+            area_total,
+            any_diffuse,
+        } = Meshed::of(scene);
         let nt = scene.tris.len();
-        let mut kd: Vec<Option<[f32; 3]>> = Vec::with_capacity(nt);
-        let mut any_diffuse = false;
-        let mut area_total = 0.0f64;
-        let mut areas = Vec::with_capacity(nt);
-        let rho_of: Vec<Option<[f32; 3]>> = (0..scene.materials.len() as u32)
-            .map(|m| diffuse_kd(scene, m))
-            .collect();
-        for (t, tri) in scene.tris.iter().enumerate() {
-            let m = scene.tri_material[t];
-            let d = rho_of[m as usize];
-            any_diffuse |= d.is_some();
-            let meshed = d.is_some() || scene.materials[m as usize].is_emissive();
-            let a = 0.5 * (tri[1] - tri[0]).cross(tri[2] - tri[0]).length() as f64;
-            if meshed {
-                area_total += a;
-            }
-            areas.push(meshed.then_some(a));
-            kd.push(d);
-        }
         if !any_diffuse {
             return Err(format!(
                 "scene {name}: no diffuse surface, the radiosity preprocess has nothing to solve"
@@ -317,10 +384,7 @@ impl Solution {
             Some(a) => a as f64,
             None => area_total / set.default_elements,
         };
-        let levels: Vec<Option<u32>> = areas
-            .iter()
-            .map(|a| a.map(|a| mesh::level_for(a, max_area)))
-            .collect();
+        let levels = levels_for(&areas, max_area);
         // --- refuse a mesh too fine before allocating it
         let (ne, nv) = mesh::count(&levels);
         let bytes = ne as f64 * (std::mem::size_of::<mesh::Element>() + 48 * bands) as f64
@@ -505,6 +569,7 @@ impl Solution {
             element_indirect,
             tri_e,
             stats,
+            coarser: None,
         })
     }
 
