@@ -289,10 +289,14 @@ fn levels_for(areas: &[Option<f64>], max_area: f64) -> Vec<Option<u32>> {
         .collect()
 }
 
-/// A refined solution keeps its coarse one (`Solution::coarser`) only with at least this
-/// many times its elements: the gather's depth is chosen from how the two differ, which
-/// says little of meshes almost alike (a scene of many small triangles, one element each).
-pub const MIN_REFINEMENT: f64 = 2.25;
+/// A solution is refined (and keeps its coarse one, `Solution::coarser`) only with at least
+/// this many times the coarse one's elements: meshes almost alike (a scene of many small
+/// triangles, one element each) are not worth a second solve, and the gather's depth,
+/// chosen from how the two differ, would learn little from them.
+pub const MIN_REFINEMENT: f64 = 1.5;
+
+/// The steps of the area divisor in which a budget's mesh is searched.
+const REFINE_STEP: f64 = 1.25;
 
 impl Solution {
     /// Mesh the scene and solve on `bands` bands (3, 8 or 16). With a time budget and the
@@ -329,15 +333,23 @@ impl Solution {
         let coarse = Self::compute_mesh(scene, &coarse_set, bands, progress)?;
         let elements = match budget {
             Some(seconds) => {
+                // the finest mesh whose solve, predicted from the coarse one's as time ~
+                // elements^2, fits what is left (counted, not assumed proportional to the
+                // area divisor: small triangles keep one element whatever the divisor)
                 let t0 = coarse.stats.seconds.max(1e-3);
                 let left = PREPROCESS_SHARE * seconds - t0;
-                ROULETTE_ELEMENTS * (left.max(0.0) / t0).sqrt()
+                let fits = |d: f64| t0 * (meshed.elements(d) as f64 / n_coarse).powi(2) <= left;
+                let mut d = ROULETTE_ELEMENTS;
+                while d < set.default_elements && fits((d * REFINE_STEP).min(set.default_elements))
+                {
+                    d = (d * REFINE_STEP).min(set.default_elements);
+                }
+                d
             }
             None => set.default_elements,
         }
         .min(set.default_elements);
-        if elements < 1.5 * ROULETTE_ELEMENTS || (meshed.elements(elements) as f64) < 1.5 * n_coarse
-        {
+        if !refines(elements) {
             return Ok(coarse);
         }
         let fine_set = RadiositySettings {
@@ -345,9 +357,7 @@ impl Solution {
             ..*set
         };
         let mut fine = Self::compute_mesh(scene, &fine_set, bands, progress)?;
-        if refines(elements) {
-            fine.coarser = Some(Arc::new(coarse));
-        }
+        fine.coarser = Some(Arc::new(coarse));
         Ok(fine)
     }
 
