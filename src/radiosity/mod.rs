@@ -295,6 +295,13 @@ fn levels_for(areas: &[Option<f64>], max_area: f64) -> Vec<Option<u32>> {
 /// chosen from how the two differ, would learn little from them.
 pub const MIN_REFINEMENT: f64 = 1.5;
 
+/// The solver's time grows about as the elements to this power (shots to reach the
+/// tolerance times the rays per shot; on the Cornell box, 2026-12-06, Xeon: 66 elements
+/// 0.01 s, 738 0.24 s, 2,952 1.84 s, 4,128 3.11 s, `kalos radiosity cornell
+/// --radiosity-max-area A`: 1.3-1.6; on a loaded machine 258 elements 0.06 s, 840 0.45 s,
+/// 3,360 5.3 s: 1.7-1.8).
+const SOLVE_EXPONENT: f64 = 1.75;
+
 /// The steps of the area divisor in which a budget's mesh is searched.
 const REFINE_STEP: f64 = 1.25;
 
@@ -302,7 +309,7 @@ impl Solution {
     /// Mesh the scene and solve on `bands` bands (3, 8 or 16). With a time budget and the
     /// default mesh, a coarse solution (`ROULETTE_ELEMENTS`) is solved first and timed; the
     /// mesh is then refined as far as `PREPROCESS_SHARE` of the budget allows at the
-    /// solver's measured rate (time ~ elements^2), never past the default mesh; the coarse
+    /// solver's measured rate (time ~ elements^1.75, `SOLVE_EXPONENT`), never past the default mesh; the coarse
     /// solution is kept when refining would not give half as many elements again. Without a
     /// budget the default mesh is solved after the coarse one (a few thousandths of its
     /// time). The refined solution keeps the coarse one (`coarser`).
@@ -334,12 +341,20 @@ impl Solution {
         let elements = match budget {
             Some(seconds) => {
                 // the finest mesh whose solve, predicted from the coarse one's as time ~
-                // elements^2, fits what is left (counted, not assumed proportional to the
+                // elements^SOLVE_EXPONENT, fits what is left (counted, not assumed proportional to the
                 // area divisor: small triangles keep one element whatever the divisor)
                 let t0 = coarse.stats.seconds.max(1e-3);
                 let left = PREPROCESS_SHARE * seconds - t0;
-                let fits = |d: f64| t0 * (meshed.elements(d) as f64 / n_coarse).powi(2) <= left;
-                let mut d = ROULETTE_ELEMENTS;
+                let fits = |d: f64| {
+                    t0 * (meshed.elements(d) as f64 / n_coarse).powf(SOLVE_EXPONENT) <= left
+                };
+                // the divisor's own rule (time ~ divisor^2: elements in proportion to the
+                // divisor, as on a scene of large triangles, where it was measured), or the
+                // counted one where the elements grow more slowly than the divisor
+                let mut d = ROULETTE_ELEMENTS * (left.max(0.0) / t0).sqrt();
+                if d < ROULETTE_ELEMENTS {
+                    d = ROULETTE_ELEMENTS;
+                }
                 while d < set.default_elements && fits((d * REFINE_STEP).min(set.default_elements))
                 {
                     d = (d * REFINE_STEP).min(set.default_elements);
