@@ -43,7 +43,7 @@ pub fn radiance<const N: usize>(
     while let Some(ray) = p.ray {
         c.rays += 1;
         let hit = scene.intersect(&ray, f32::INFINITY);
-        p.advance(scene, &ray, hit, s, set, l_tilde, c, None);
+        p.advance::<false>(scene, &ray, hit, s, set, l_tilde, c, None);
         let occluded = p
             .shadow
             .as_ref()
@@ -58,7 +58,28 @@ pub fn radiance<const N: usize>(
 /// queries of all paths are answered together by `Bvh::trace`, which overlaps their
 /// memory loads on scenes larger than the caches and keeps the traversal's code and
 /// branch history warm on the others.
+///
+/// Scenes of their own triangles alone without normal or bump maps
+/// ([`Scene::plain_hits`]) take code without the instances', grids' and maps' work per
+/// hit (`PLAIN`), as before those features.
 pub fn radiance_batch<const N: usize>(
+    scene: &Scene,
+    rays: &[Ray],
+    streams: &mut [SampleStream],
+    set: &IntegratorSettings,
+    l_tilde: &LTilde<N>,
+    c: &mut Counters,
+    out: &mut [Spectrum<N>],
+) {
+    if scene.plain_hits() {
+        batch::<N, true>(scene, rays, streams, set, l_tilde, c, out)
+    } else {
+        batch::<N, false>(scene, rays, streams, set, l_tilde, c, out)
+    }
+}
+
+/// [`radiance_batch`], `PLAIN` when [`Scene::plain_hits`].
+fn batch<const N: usize, const PLAIN: bool>(
     scene: &Scene,
     rays: &[Ray],
     streams: &mut [SampleStream],
@@ -124,9 +145,9 @@ pub fn radiance_batch<const N: usize>(
                 let Some(RayAnswer::Closest(h)) = a.next() else {
                     unreachable!("answers follow the queries")
                 };
-                let hit = h.map(|h| scene.surface_hit(h, -ray.d));
+                let hit = h.map(|h| scene.surface_hit_of::<PLAIN>(h, -ray.d));
                 let lane = lanes.as_mut().map(|l| (l, i as u8));
-                p.advance(scene, &ray, hit, s, set, l_tilde, c, lane);
+                p.advance::<PLAIN>(scene, &ray, hit, s, set, l_tilde, c, lane);
             }
         }
         timer.lap(Phase::Advance);
@@ -212,10 +233,11 @@ impl<const N: usize> PathState<N> {
         }
     }
 
-    /// The segment along `ray` reached `hit` (`None`: it left the scene).
+    /// The segment along `ray` reached `hit` (`None`: it left the scene); `PLAIN` as
+    /// [`Scene::surface_hit_of`]'s.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn advance(
+    fn advance<const PLAIN: bool>(
         &mut self,
         scene: &Scene,
         ray: &Ray,
@@ -251,7 +273,7 @@ impl<const N: usize> PathState<N> {
         let bsdf = scene.bsdf_at(mat, &hit, wo);
         let Shading { ng, ns, frame } = hit.shading(wo, bsdf.is_two_sided());
         // a normal or bump map's shadowing term (texture/normal.rs)
-        let term = if scene.normal_maps {
+        let term = if !PLAIN && scene.normal_maps {
             scene.terminator(mat, &hit)
         } else {
             None

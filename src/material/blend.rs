@@ -39,6 +39,28 @@ impl Blend {
         super::intern::intern(pair)
     }
 
+    // The blend's answers to `Bsdf`'s questions about its pair, out of line: `Bsdf`'s
+    // own answer then does not call itself and is inlined into the per-hit code of every
+    // scene (recursive, it was a call per hit: the furnished room, 2026-12-06).
+
+    /// Both two-sided ([`Bsdf::is_two_sided`]).
+    #[inline(never)]
+    pub fn is_two_sided(&self) -> bool {
+        self.pair.iter().all(Bsdf::is_two_sided)
+    }
+
+    /// Both only Dirac lobes ([`Bsdf::is_delta`]).
+    #[inline(never)]
+    pub fn is_delta(&self) -> bool {
+        self.pair.iter().all(Bsdf::is_delta)
+    }
+
+    /// Either lets light through ([`Bsdf::transmits`]).
+    #[inline(never)]
+    pub fn transmits(&self) -> bool {
+        self.pair.iter().any(Bsdf::transmits)
+    }
+
     #[inline]
     pub fn eval<const N: usize>(&self, wo: Vec3, wi: Vec3) -> Spectrum<N> {
         let w = self.weight;
