@@ -622,6 +622,103 @@ mod tests {
         (one, batched)
     }
 
+    /// A Mitsuba scene of a lit diffuse sphere over a rough conductor, with `extra`
+    /// shapes after them and the floor's BSDF wrapped by `wrap` (`{}`: the BSDF).
+    fn xml_scene(wrap: &str, extra: &str) -> Scene {
+        let floor = wrap.replace("{}", r#"<bsdf type="roughconductor"/>"#);
+        let text = format!(
+            r#"<scene version="3.0.0">
+            <sensor type="perspective"><float name="fov" value="40"/>
+                <transform name="to_world"><lookat origin="0, -6, 2" target="0, 0, 0" up="0, 0, 1"/></transform>
+                <film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="12"/></film></sensor>
+            <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><rotate x="1" angle="180"/><translate z="3"/></transform>
+                <emitter type="area"><rgb name="radiance" value="20"/></emitter></shape>
+            <shape type="sphere"><float name="radius" value="0.8"/><bsdf type="diffuse"/></shape>
+            <shape type="rectangle"><transform name="to_world"><scale value="3"/><translate z="-0.8"/></transform>{floor}</shape>
+            {extra}</scene>"#
+        );
+        let desc = crate::scene::mitsuba::parse(&text, "t.xml", std::path::Path::new(".")).unwrap();
+        Scene::build(desc, 0.0).unwrap()
+    }
+
+    /// Which scenes take the batch without the instances', grids' and maps' work: those
+    /// of their own triangles without normal or bump maps, not one with a normal map or
+    /// with an instance.
+    #[test]
+    fn plain_hits_are_the_scenes_without_instances_or_maps() {
+        assert!(crate::scene::load("cornell").unwrap().plain_hits());
+        assert!(xml_scene("{}", "").plain_hits());
+        let map = r#"<bsdf type="normalmap"><texture name="normalmap" type="rawconstant">
+            <vector name="value" value="0.8, 0.5, 0.9"/></texture>{}</bsdf>"#;
+        assert!(!xml_scene(map, "").plain_hits());
+        let group = r#"<shape type="shapegroup" id="g"><shape type="cube">
+            <transform name="to_world"><scale value="0.3"/><translate x="1.5"/></transform></shape></shape>
+            <shape type="instance"><ref id="g"/></shape>"#;
+        assert!(!xml_scene("{}", group).plain_hits());
+    }
+
+    /// The batch of a plain scene (`PLAIN`) is the general batch, bit for bit, and the
+    /// general batch of scenes with a normal map or an instance is their paths one at a
+    /// time.
+    #[test]
+    fn the_plain_batch_is_the_general_batch_bit_for_bit() {
+        let set = IntegratorSettings {
+            max_depth: 8,
+            ..Default::default()
+        };
+        let image = |scene: &Scene, plain: bool| {
+            let (w, h) = (12u32, 12u32);
+            let cam = Camera::new(scene.camera, w, h);
+            let cfg = SamplerConfig::default();
+            let lt = LTilde::Scene(Spectrum::<3>::splat(0.05));
+            let mut c = Counters::default();
+            let mut bits = Vec::new();
+            for y in 0..h {
+                for x0 in (0..w).step_by(4) {
+                    let mut streams: Vec<SampleStream> = (0..BATCH_PATHS as u32)
+                        .map(|i| SampleStream::new(&cfg, 0, y * w + x0 + i % 4, (i / 4) as u64))
+                        .collect();
+                    let rays: Vec<Ray> = streams
+                        .iter_mut()
+                        .enumerate()
+                        .map(|(i, s)| camera_ray(&cam, x0 + i as u32 % 4, y, s))
+                        .collect();
+                    let mut out = vec![Spectrum::<3>::ZERO; rays.len()];
+                    let (r, s, o) = (&rays[..], &mut streams[..], &mut out[..]);
+                    if plain {
+                        batch::<3, true>(scene, r, s, &set, &lt, &mut c, o);
+                    } else {
+                        batch::<3, false>(scene, r, s, &set, &lt, &mut c, o);
+                    }
+                    bits.extend(out.iter().flat_map(|v| v.to_rgb().map(f32::to_bits)));
+                }
+            }
+            bits
+        };
+        for scene in [crate::scene::load("cornell").unwrap(), xml_scene("{}", "")] {
+            let general = image(&scene, false);
+            assert!(general.iter().any(|&v| v != 0), "a black image");
+            assert!(image(&scene, true) == general, "the plain batch differs");
+        }
+        let map = r#"<bsdf type="normalmap"><texture name="normalmap" type="rawconstant">
+            <vector name="value" value="0.8, 0.5, 0.9"/></texture>{}</bsdf>"#;
+        let group = r#"<shape type="shapegroup" id="g"><shape type="cube">
+            <transform name="to_world"><scale value="0.3"/><translate x="1.5"/></transform></shape></shape>
+            <shape type="instance"><ref id="g"/></shape>"#;
+        for scene in [xml_scene(map, ""), xml_scene("{}", group)] {
+            assert!(!scene.plain_hits());
+            for n in [3, 8] {
+                let (a, b) = if n == 3 {
+                    both_ways::<3>(&scene, &set)
+                } else {
+                    both_ways::<8>(&scene, &set)
+                };
+                assert!(a.iter().any(|&v| v != 0), "a black image");
+                assert!(a == b, "batched paths differ ({n} bands)");
+            }
+        }
+    }
+
     #[test]
     fn batched_paths_are_the_paths_one_at_a_time_bit_for_bit() {
         let xml = concat!(

@@ -183,6 +183,30 @@ mod tests {
         }
     }
 
+    /// A blend is two-sided if both are, Dirac if both are, and transmits if either does.
+    #[test]
+    fn a_blend_answers_for_its_pair() {
+        use crate::material::{Dielectric, RoughDielectric};
+        let glass = Bsdf::Dielectric(Dielectric {
+            eta: 1.5,
+            tint: crate::material::dielectric::Tint::NONE,
+        });
+        let rough_glass = Bsdf::RoughDielectric(RoughDielectric {
+            eta: 1.5,
+            alpha: 0.3,
+            dist: Distribution::Ggx,
+            tint: crate::material::dielectric::Tint::NONE,
+        });
+        let blend = |a: Bsdf, b: Bsdf| Bsdf::Blend(Blend::new(Blend::intern([a, b]), 0.5));
+        let d = diffuse([0.5; 3]);
+        let b = blend(d.clone(), gold(0.0));
+        assert!(b.is_two_sided() && !b.is_delta() && !b.transmits());
+        let b = blend(gold(0.0), glass.clone());
+        assert!(!b.is_two_sided() && b.is_delta() && !b.transmits());
+        let b = blend(d, rough_glass);
+        assert!(!b.is_two_sided() && !b.is_delta() && b.transmits());
+    }
+
     /// Sampling follows `pdf` (chi-square), rough and Dirac parts alike, and its weight
     /// is f cos / pdf for the non-Dirac directions.
     #[test]
