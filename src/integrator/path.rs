@@ -71,24 +71,27 @@ pub fn radiance_batch<const N: usize>(
     c: &mut Counters,
     out: &mut [Spectrum<N>],
 ) {
+    let paths = (rays, streams, out);
     if scene.plain_hits() {
-        batch::<N, true>(scene, rays, streams, set, l_tilde, c, out)
+        batch::<N, true>(scene, paths, set, l_tilde, c)
     } else {
-        batch::<N, false>(scene, rays, streams, set, l_tilde, c, out)
+        batch::<N, false>(scene, paths, set, l_tilde, c)
     }
 }
+
+/// A batch's paths: their camera rays, sample streams and radiance (out).
+type Paths<'a, const N: usize> = (&'a [Ray], &'a mut [SampleStream], &'a mut [Spectrum<N>]);
 
 /// [`radiance_batch`], `PLAIN` when [`Scene::plain_hits`].
 fn batch<const N: usize, const PLAIN: bool>(
     scene: &Scene,
-    rays: &[Ray],
-    streams: &mut [SampleStream],
+    paths: Paths<'_, N>,
     set: &IntegratorSettings,
     l_tilde: &LTilde<N>,
     c: &mut Counters,
-    out: &mut [Spectrum<N>],
 ) {
     use crate::accel::{RayAnswer, RayQuery};
+    let (rays, streams, out) = paths;
     let n = rays.len();
     assert!(n <= BATCH_PATHS && streams.len() == n && out.len() == n);
     let mut st = [PathState::<N>::DONE; BATCH_PATHS];
@@ -684,11 +687,11 @@ mod tests {
                         .map(|(i, s)| camera_ray(&cam, x0 + i as u32 % 4, y, s))
                         .collect();
                     let mut out = vec![Spectrum::<3>::ZERO; rays.len()];
-                    let (r, s, o) = (&rays[..], &mut streams[..], &mut out[..]);
+                    let paths = (&rays[..], &mut streams[..], &mut out[..]);
                     if plain {
-                        batch::<3, true>(scene, r, s, &set, &lt, &mut c, o);
+                        batch::<3, true>(scene, paths, &set, &lt, &mut c);
                     } else {
-                        batch::<3, false>(scene, r, s, &set, &lt, &mut c, o);
+                        batch::<3, false>(scene, paths, &set, &lt, &mut c);
                     }
                     bits.extend(out.iter().flat_map(|v| v.to_rgb().map(f32::to_bits)));
                 }
