@@ -59,10 +59,10 @@ pub fn radiance<const N: usize>(
 /// memory loads on scenes larger than the caches and keeps the traversal's code and
 /// branch history warm on the others.
 ///
-/// Scenes of their own triangles alone without normal or bump maps
-/// ([`Scene::plain_hits`]) take code without the instances', grids' and maps' work per
-/// hit (`PLAIN`), as before those features.
-pub fn radiance_batch<const N: usize>(
+/// `PLAIN`: the caller has checked that the scene's hits are all its own triangles without
+/// normal or bump maps ([`Scene::plain_hits`]), and the paths take code without the
+/// instances', grids' and maps' work per hit, as before those features.
+pub fn radiance_batch<const N: usize, const PLAIN: bool>(
     scene: &Scene,
     rays: &[Ray],
     streams: &mut [SampleStream],
@@ -71,27 +71,11 @@ pub fn radiance_batch<const N: usize>(
     c: &mut Counters,
     out: &mut [Spectrum<N>],
 ) {
-    let paths = (rays, streams, out);
-    if scene.plain_hits() {
-        batch::<N, true>(scene, paths, set, l_tilde, c)
-    } else {
-        batch::<N, false>(scene, paths, set, l_tilde, c)
-    }
-}
-
-/// A batch's paths: their camera rays, sample streams and radiance (out).
-type Paths<'a, const N: usize> = (&'a [Ray], &'a mut [SampleStream], &'a mut [Spectrum<N>]);
-
-/// [`radiance_batch`], `PLAIN` when [`Scene::plain_hits`].
-fn batch<const N: usize, const PLAIN: bool>(
-    scene: &Scene,
-    paths: Paths<'_, N>,
-    set: &IntegratorSettings,
-    l_tilde: &LTilde<N>,
-    c: &mut Counters,
-) {
     use crate::accel::{RayAnswer, RayQuery};
-    let (rays, streams, out) = paths;
+    assert!(
+        !PLAIN || scene.plain_hits(),
+        "a plain batch of a scene with instances or maps"
+    );
     let n = rays.len();
     assert!(n <= BATCH_PATHS && streams.len() == n && out.len() == n);
     let mut st = [PathState::<N>::DONE; BATCH_PATHS];
@@ -616,7 +600,12 @@ mod tests {
                 .map(|(j, s)| camera_ray(&cam, j.0, j.1, s))
                 .collect();
             let mut out = vec![Spectrum::<N>::ZERO; chunk.len()];
-            radiance_batch::<N>(scene, &rays, &mut streams, set, &lt, &mut c2, &mut out);
+            let (r, s, o) = (&rays[..], &mut streams[..], &mut out[..]);
+            if scene.plain_hits() {
+                radiance_batch::<N, true>(scene, r, s, set, &lt, &mut c2, o);
+            } else {
+                radiance_batch::<N, false>(scene, r, s, set, &lt, &mut c2, o);
+            }
             batched.extend(out.into_iter().flat_map(bits));
             at += chunk.len();
             len = len % BATCH_PATHS + 1;
@@ -687,11 +676,11 @@ mod tests {
                         .map(|(i, s)| camera_ray(&cam, x0 + i as u32 % 4, y, s))
                         .collect();
                     let mut out = vec![Spectrum::<3>::ZERO; rays.len()];
-                    let paths = (&rays[..], &mut streams[..], &mut out[..]);
+                    let (r, s, o) = (&rays[..], &mut streams[..], &mut out[..]);
                     if plain {
-                        batch::<3, true>(scene, paths, &set, &lt, &mut c);
+                        radiance_batch::<3, true>(scene, r, s, &set, &lt, &mut c, o);
                     } else {
-                        batch::<3, false>(scene, paths, &set, &lt, &mut c);
+                        radiance_batch::<3, false>(scene, r, s, &set, &lt, &mut c, o);
                     }
                     bits.extend(out.iter().flat_map(|v| v.to_rgb().map(f32::to_bits)));
                 }
