@@ -342,7 +342,8 @@ impl Integrator {
         let samples = samples.into_iter();
         if self.batches() && layer == Layer::None && !sink.counts_rays() && !sink.wants_strategies()
         {
-            // (scenes without instances or maps take the plain batch: path::radiance_batch)
+            // (scenes without instances or maps take the plain batch, checked once here:
+            // see path::radiance_batch)
             return match ctx.scene.plain_hits() {
                 true => self.sample_batches::<N, true>(ctx, samples, sink, c),
                 false => self.sample_batches::<N, false>(ctx, samples, sink, c),
@@ -374,7 +375,8 @@ impl Integrator {
         }
     }
 
-    /// The path tracer's samples, [`path::BATCH_PATHS`] at a time through `Bvh::trace`.
+    /// The path tracer's samples, [`path::BATCH_PATHS`] at a time through `Bvh::trace`;
+    /// `PLAIN` when the scene's hits are plain ([`Scene::plain_hits`]).
     fn sample_batches<const N: usize, const PLAIN: bool>(
         &self,
         ctx: &SampleCtx,
