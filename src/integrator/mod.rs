@@ -344,7 +344,12 @@ impl Integrator {
         let samples = samples.into_iter();
         if self.batches() && layer == Layer::None && !sink.counts_rays() && !sink.wants_strategies()
         {
-            return self.sample_batches::<N>(ctx, samples, sink, c);
+            // (scenes without instances or maps take the plain batch, checked once here:
+            // see path::radiance_batch)
+            return match ctx.scene.plain_hits() {
+                true => self.sample_batches::<N, true>(ctx, samples, sink, c),
+                false => self.sample_batches::<N, false>(ctx, samples, sink, c),
+            };
         }
         let counts_rays = sink.counts_rays();
         for cs in samples {
@@ -372,8 +377,9 @@ impl Integrator {
         }
     }
 
-    /// The path tracer's samples, [`path::BATCH_PATHS`] at a time through `Bvh::trace`.
-    fn sample_batches<const N: usize>(
+    /// The path tracer's samples, [`path::BATCH_PATHS`] at a time through `Bvh::trace`;
+    /// `PLAIN` when the scene's hits are plain ([`Scene::plain_hits`]).
+    fn sample_batches<const N: usize, const PLAIN: bool>(
         &self,
         ctx: &SampleCtx,
         mut samples: impl Iterator<Item = CameraSample>,
@@ -405,7 +411,7 @@ impl Integrator {
                 *r = camera_ray(ctx.cam, cs.x, cs.y, s);
             }
             let mut l = [crate::spectrum::Spectrum::<N>::ZERO; path::BATCH_PATHS];
-            path::radiance_batch::<N>(
+            path::radiance_batch::<N, PLAIN>(
                 ctx.scene,
                 &rays[..n],
                 &mut streams,

@@ -43,7 +43,7 @@ pub fn radiance<const N: usize>(
     while let Some(ray) = p.ray {
         c.rays += 1;
         let hit = scene.intersect(&ray, f32::INFINITY);
-        p.advance(scene, &ray, hit, s, set, l_tilde, c, None);
+        p.advance::<false>(scene, &ray, hit, s, set, l_tilde, c, None);
         let occluded = p
             .shadow
             .as_ref()
@@ -58,7 +58,11 @@ pub fn radiance<const N: usize>(
 /// queries of all paths are answered together by `Bvh::trace`, which overlaps their
 /// memory loads on scenes larger than the caches and keeps the traversal's code and
 /// branch history warm on the others.
-pub fn radiance_batch<const N: usize>(
+///
+/// `PLAIN`: the caller has checked that the scene's hits are all its own triangles without
+/// normal or bump maps ([`Scene::plain_hits`]), and the paths take code without the
+/// instances', grids' and maps' work per hit, as before those features.
+pub fn radiance_batch<const N: usize, const PLAIN: bool>(
     scene: &Scene,
     rays: &[Ray],
     streams: &mut [SampleStream],
@@ -68,6 +72,10 @@ pub fn radiance_batch<const N: usize>(
     out: &mut [Spectrum<N>],
 ) {
     use crate::accel::{RayAnswer, RayQuery};
+    assert!(
+        !PLAIN || scene.plain_hits(),
+        "a plain batch of a scene with instances or maps"
+    );
     let n = rays.len();
     assert!(n <= BATCH_PATHS && streams.len() == n && out.len() == n);
     let mut st = [PathState::<N>::DONE; BATCH_PATHS];
@@ -124,9 +132,9 @@ pub fn radiance_batch<const N: usize>(
                 let Some(RayAnswer::Closest(h)) = a.next() else {
                     unreachable!("answers follow the queries")
                 };
-                let hit = h.map(|h| scene.surface_hit(h, -ray.d));
+                let hit = h.map(|h| scene.surface_hit_of::<PLAIN>(h, -ray.d));
                 let lane = lanes.as_mut().map(|l| (l, i as u8));
-                p.advance(scene, &ray, hit, s, set, l_tilde, c, lane);
+                p.advance::<PLAIN>(scene, &ray, hit, s, set, l_tilde, c, lane);
             }
         }
         timer.lap(Phase::Advance);
@@ -212,10 +220,11 @@ impl<const N: usize> PathState<N> {
         }
     }
 
-    /// The segment along `ray` reached `hit` (`None`: it left the scene).
+    /// The segment along `ray` reached `hit` (`None`: it left the scene); `PLAIN` as
+    /// [`Scene::surface_hit_of`]'s.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn advance(
+    fn advance<const PLAIN: bool>(
         &mut self,
         scene: &Scene,
         ray: &Ray,
@@ -251,7 +260,7 @@ impl<const N: usize> PathState<N> {
         let bsdf = scene.bsdf_at(mat, &hit, wo);
         let Shading { ng, ns, frame } = hit.shading(wo, bsdf.is_two_sided());
         // a normal or bump map's shadowing term (texture/normal.rs)
-        let term = if scene.normal_maps {
+        let term = if !PLAIN && scene.normal_maps {
             scene.terminator(mat, &hit)
         } else {
             None
@@ -591,13 +600,115 @@ mod tests {
                 .map(|(j, s)| camera_ray(&cam, j.0, j.1, s))
                 .collect();
             let mut out = vec![Spectrum::<N>::ZERO; chunk.len()];
-            radiance_batch::<N>(scene, &rays, &mut streams, set, &lt, &mut c2, &mut out);
+            let (r, s, o) = (&rays[..], &mut streams[..], &mut out[..]);
+            if scene.plain_hits() {
+                radiance_batch::<N, true>(scene, r, s, set, &lt, &mut c2, o);
+            } else {
+                radiance_batch::<N, false>(scene, r, s, set, &lt, &mut c2, o);
+            }
             batched.extend(out.into_iter().flat_map(bits));
             at += chunk.len();
             len = len % BATCH_PATHS + 1;
         }
         assert_eq!((c.paths, c.rays), (c2.paths, c2.rays), "the same rays");
         (one, batched)
+    }
+
+    /// A Mitsuba scene of a lit diffuse sphere over a rough conductor, with `extra`
+    /// shapes after them and the floor's BSDF wrapped by `wrap` (`{}`: the BSDF).
+    fn xml_scene(wrap: &str, extra: &str) -> Scene {
+        let floor = wrap.replace("{}", r#"<bsdf type="roughconductor"/>"#);
+        let text = format!(
+            r#"<scene version="3.0.0">
+            <sensor type="perspective"><float name="fov" value="40"/>
+                <transform name="to_world"><lookat origin="0, -6, 2" target="0, 0, 0" up="0, 0, 1"/></transform>
+                <film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="12"/></film></sensor>
+            <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><rotate x="1" angle="180"/><translate z="3"/></transform>
+                <emitter type="area"><rgb name="radiance" value="20"/></emitter></shape>
+            <shape type="sphere"><float name="radius" value="0.8"/><bsdf type="diffuse"/></shape>
+            <shape type="rectangle"><transform name="to_world"><scale value="3"/><translate z="-0.8"/></transform>{floor}</shape>
+            {extra}</scene>"#
+        );
+        let desc = crate::scene::mitsuba::parse(&text, "t.xml", std::path::Path::new(".")).unwrap();
+        Scene::build(desc, 0.0).unwrap()
+    }
+
+    /// Which scenes take the batch without the instances', grids' and maps' work: those
+    /// of their own triangles without normal or bump maps, not one with a normal map or
+    /// with an instance.
+    #[test]
+    fn plain_hits_are_the_scenes_without_instances_or_maps() {
+        assert!(crate::scene::load("cornell").unwrap().plain_hits());
+        assert!(xml_scene("{}", "").plain_hits());
+        let map = r#"<bsdf type="normalmap"><texture name="normalmap" type="rawconstant">
+            <vector name="value" value="0.8, 0.5, 0.9"/></texture>{}</bsdf>"#;
+        assert!(!xml_scene(map, "").plain_hits());
+        let group = r#"<shape type="shapegroup" id="g"><shape type="cube">
+            <transform name="to_world"><scale value="0.3"/><translate x="1.5"/></transform></shape></shape>
+            <shape type="instance"><ref id="g"/></shape>"#;
+        assert!(!xml_scene("{}", group).plain_hits());
+    }
+
+    /// The batch of a plain scene (`PLAIN`) is the general batch, bit for bit, and the
+    /// general batch of scenes with a normal map or an instance is their paths one at a
+    /// time.
+    #[test]
+    fn the_plain_batch_is_the_general_batch_bit_for_bit() {
+        let set = IntegratorSettings {
+            max_depth: 8,
+            ..Default::default()
+        };
+        let image = |scene: &Scene, plain: bool| {
+            let (w, h) = (12u32, 12u32);
+            let cam = Camera::new(scene.camera, w, h);
+            let cfg = SamplerConfig::default();
+            let lt = LTilde::Scene(Spectrum::<3>::splat(0.05));
+            let mut c = Counters::default();
+            let mut bits = Vec::new();
+            for y in 0..h {
+                for x0 in (0..w).step_by(4) {
+                    let mut streams: Vec<SampleStream> = (0..BATCH_PATHS as u32)
+                        .map(|i| SampleStream::new(&cfg, 0, y * w + x0 + i % 4, (i / 4) as u64))
+                        .collect();
+                    let rays: Vec<Ray> = streams
+                        .iter_mut()
+                        .enumerate()
+                        .map(|(i, s)| camera_ray(&cam, x0 + i as u32 % 4, y, s))
+                        .collect();
+                    let mut out = vec![Spectrum::<3>::ZERO; rays.len()];
+                    let (r, s, o) = (&rays[..], &mut streams[..], &mut out[..]);
+                    if plain {
+                        radiance_batch::<3, true>(scene, r, s, &set, &lt, &mut c, o);
+                    } else {
+                        radiance_batch::<3, false>(scene, r, s, &set, &lt, &mut c, o);
+                    }
+                    bits.extend(out.iter().flat_map(|v| v.to_rgb().map(f32::to_bits)));
+                }
+            }
+            bits
+        };
+        for scene in [crate::scene::load("cornell").unwrap(), xml_scene("{}", "")] {
+            let general = image(&scene, false);
+            assert!(general.iter().any(|&v| v != 0), "a black image");
+            assert!(image(&scene, true) == general, "the plain batch differs");
+        }
+        let map = r#"<bsdf type="normalmap"><texture name="normalmap" type="rawconstant">
+            <vector name="value" value="0.8, 0.5, 0.9"/></texture>{}</bsdf>"#;
+        let group = r#"<shape type="shapegroup" id="g"><shape type="cube">
+            <transform name="to_world"><scale value="0.3"/><translate x="1.5"/></transform></shape></shape>
+            <shape type="instance"><ref id="g"/></shape>"#;
+        for scene in [xml_scene(map, ""), xml_scene("{}", group)] {
+            assert!(!scene.plain_hits());
+            for n in [3, 8] {
+                let (a, b) = if n == 3 {
+                    both_ways::<3>(&scene, &set)
+                } else {
+                    both_ways::<8>(&scene, &set)
+                };
+                assert!(a.iter().any(|&v| v != 0), "a black image");
+                assert!(a == b, "batched paths differ ({n} bands)");
+            }
+        }
     }
 
     #[test]

@@ -39,6 +39,28 @@ impl Blend {
         super::intern::intern(pair)
     }
 
+    // The blend's answers to `Bsdf`'s questions about its pair, out of line: `Bsdf`'s
+    // own answer then does not call itself and is inlined into the per-hit code of every
+    // scene (recursive, it was a call per hit: the furnished room, 2026-12-06).
+
+    /// Both two-sided ([`Bsdf::is_two_sided`]).
+    #[inline(never)]
+    pub fn is_two_sided(&self) -> bool {
+        self.pair.iter().all(Bsdf::is_two_sided)
+    }
+
+    /// Both only Dirac lobes ([`Bsdf::is_delta`]).
+    #[inline(never)]
+    pub fn is_delta(&self) -> bool {
+        self.pair.iter().all(Bsdf::is_delta)
+    }
+
+    /// Either lets light through ([`Bsdf::transmits`]).
+    #[inline(never)]
+    pub fn transmits(&self) -> bool {
+        self.pair.iter().any(Bsdf::transmits)
+    }
+
     #[inline]
     pub fn eval<const N: usize>(&self, wo: Vec3, wi: Vec3) -> Spectrum<N> {
         let w = self.weight;
@@ -159,6 +181,30 @@ mod tests {
         for (c, kd) in [0.3f32, 0.65, 0.35].into_iter().enumerate() {
             assert!((f[c] - kd / pi).abs() < 1e-6, "{c}: {}", f[c]);
         }
+    }
+
+    /// A blend is two-sided if both are, Dirac if both are, and transmits if either does.
+    #[test]
+    fn a_blend_answers_for_its_pair() {
+        use crate::material::{Dielectric, RoughDielectric};
+        let glass = Bsdf::Dielectric(Dielectric {
+            eta: 1.5,
+            tint: crate::material::dielectric::Tint::NONE,
+        });
+        let rough_glass = Bsdf::RoughDielectric(RoughDielectric {
+            eta: 1.5,
+            alpha: 0.3,
+            dist: Distribution::Ggx,
+            tint: crate::material::dielectric::Tint::NONE,
+        });
+        let blend = |a: Bsdf, b: Bsdf| Bsdf::Blend(Blend::new(Blend::intern([a, b]), 0.5));
+        let d = diffuse([0.5; 3]);
+        let b = blend(d.clone(), gold(0.0));
+        assert!(b.is_two_sided() && !b.is_delta() && !b.transmits());
+        let b = blend(gold(0.0), glass.clone());
+        assert!(!b.is_two_sided() && b.is_delta() && !b.transmits());
+        let b = blend(d, rough_glass);
+        assert!(!b.is_two_sided() && !b.is_delta() && b.transmits());
     }
 
     /// Sampling follows `pdf` (chi-square), rough and Dirac parts alike, and its weight

@@ -202,7 +202,7 @@ impl Bsdf {
     pub fn is_two_sided(&self) -> bool {
         match self {
             Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::Principled(_) => false,
-            Bsdf::Blend(b) => b.pair.iter().all(Bsdf::is_two_sided),
+            Bsdf::Blend(b) => b.is_two_sided(),
             _ => true,
         }
     }
@@ -213,7 +213,7 @@ impl Bsdf {
         match self {
             Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Black | Bsdf::ThinDielectric(_) => true,
             Bsdf::Conductor(c) => c.is_smooth(),
-            Bsdf::Blend(b) => b.pair.iter().all(Bsdf::is_delta),
+            Bsdf::Blend(b) => b.is_delta(),
             _ => false,
         }
     }
@@ -227,7 +227,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(_) => true,
             Bsdf::Principled(p) => p.transmits(),
             Bsdf::PrincipledThin(p) => p.transmits(),
-            Bsdf::Blend(b) => b.pair.iter().any(Bsdf::transmits),
+            Bsdf::Blend(b) => b.transmits(),
             _ => false,
         }
     }

@@ -155,7 +155,9 @@ impl SampleStream {
         }
     }
 
-    #[inline]
+    // (always: since 2026-12-06's merges the compiler had left it out of line, a call
+    // per vertex and two per light sample in the path tracer)
+    #[inline(always)]
     pub fn next_2d(&mut self) -> glam::Vec2 {
         let a = self.next_1d();
         let b = self.next_1d();

@@ -256,6 +256,31 @@ impl Scene {
     /// hit more on scenes without instances (callgrind, the furnished room, 2026-12-06).
     #[inline(always)]
     pub fn surface_hit(&self, h: Hit, wo: Vec3) -> SurfaceHit {
+        self.surface_hit_of::<false>(h, wo)
+    }
+
+    /// Whether every hit is on one of the scene's own triangles (no instances, no
+    /// signed-distance grids) and no material has a normal or bump map: what a caller
+    /// that checks it once may pass to [`Scene::surface_hit_of`] as `PLAIN`.
+    #[inline]
+    pub fn plain_hits(&self) -> bool {
+        !self.normal_maps && self.instances.is_none()
+    }
+
+    /// [`Scene::surface_hit`]; with `PLAIN` (the caller has checked
+    /// [`Scene::plain_hits`]) the record of the scene's own triangle alone, with none of
+    /// the instances', grids' or maps' branches and calls. Their calls take parts of the
+    /// record by reference or return one through memory, and in a per-hit loop that kept
+    /// the record in memory, read back in other widths than it was written (the store
+    /// not forwarded to the load): the furnished room's paths were 0.91x e91aa28's until
+    /// the path tracer took this (2026-12-06).
+    #[inline(always)]
+    pub fn surface_hit_of<const PLAIN: bool>(&self, h: Hit, wo: Vec3) -> SurfaceHit {
+        if PLAIN {
+            debug_assert!(self.plain_hits());
+            let i = h.prim as usize;
+            return self.hit_with(h, self.normals.get(i), self.uvs.get(i));
+        }
         let mut s = self.smooth_hit(h);
         if self.normal_maps {
             s.ns = self.mapped_normal(s.prim, s.uv, s.ng, s.ns, wo);
