@@ -89,9 +89,7 @@ impl<'a> Loader<'a> {
                     e.kind()
                 ));
             }
-            let radiance = self
-                .constant(e, "radiance", Use::Unbounded, "area emitter")?
-                .ok_or_else(|| format!("{}: area emitter without a radiance", e.at))?;
+            let (radiance, texture) = self.area_radiance(e)?;
             self.unused(e, "emitter 'area'");
             let mut m = self.desc.materials[mat as usize].clone();
             m.name = format!(
@@ -100,6 +98,7 @@ impl<'a> Loader<'a> {
                 e.at.rsplit(':').next().unwrap_or("")
             );
             m.ke = radiance;
+            m.ke_texture = texture;
             m.source = Some(e.at.clone());
             self.desc.materials.push(m);
             mat = self.desc.materials.len() as u32 - 1;
