@@ -99,24 +99,21 @@ fn ply_uv_unflipped_obj_uv_flipped() {
     ply += "3 0 1 2\n3 0 2 3\n";
     obj += "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
     let down = [0.0, -1.0, 0.0];
-    check(
-        "ply",
-        r#"<shape type="ply"><string name="filename" value="rect.ply"/></shape>"#,
-        &[("rect.ply", &ply)],
-        &[
-            ([1.0, 5.0, -3.0], down, [0.431415, 0.786265]),
-            ([-2.0, 5.0, 0.0], down, [0.092823, 0.943785]),
-        ],
-        1e-5,
-    );
-    check(
-        "obj",
-        r#"<shape type="obj"><string name="filename" value="rect.obj"/></shape>"#,
-        &[("rect.obj", &obj)],
-        &[
-            ([1.0, 5.0, -3.0], down, [0.431415, 0.213735]),
-            ([-2.0, 5.0, 0.0], down, [0.092823, 0.056215]),
-        ],
-        1e-5,
-    );
+    let at = [[1.0, 5.0, -3.0], [-2.0, 5.0, 0.0]];
+    for (kind, text, uv) in [
+        ("ply", &ply, [[0.431415, 0.786265], [0.092823, 0.943785]]),
+        ("obj", &obj, [[0.431415, 0.213735], [0.092823, 0.056215]]),
+    ] {
+        let file = format!("rect.{kind}");
+        let shape =
+            format!(r#"<shape type="{kind}"><string name="filename" value="{file}"/></shape>"#);
+        let cases: Vec<Case> = (0..2).map(|i| (at[i], down, uv[i])).collect();
+        check(
+            kind,
+            &shape,
+            &[(file.as_str(), text.as_str())],
+            &cases,
+            1e-5,
+        );
+    }
 }

@@ -5,8 +5,8 @@
 //! half (computed here by quadrature), and sends kd E / pi: every estimator must read the
 //! texture where it samples or hits the light, which the texture's mean (the light's
 //! power) does not give (the halves differ 8x in red and blue). The light seen directly is
-//! its texel; a Mitsuba file with a 2 x 2 bitmap gives the quadrants Mitsuba renders
-//! (bench/textured-area-light.py).
+//! its texel; a Mitsuba file with a 2 x 2 bitmap (tests/data/textured-area-light/) gives
+//! the quadrants Mitsuba renders (bench/textured-area-light.py).
 
 mod common;
 use common::*;
@@ -63,16 +63,7 @@ fn scene(camera: CameraDesc) -> Scene {
         let uv = t.map(|i| q[i].1);
         d.push_triangle(v, None, Some(uv), 0);
     }
-    kalos::scene::builtin::push_quad(
-        &mut d,
-        [
-            Vec3::new(-5.0, -5.0, 0.0),
-            Vec3::new(5.0, -5.0, 0.0),
-            Vec3::new(5.0, 5.0, 0.0),
-            Vec3::new(-5.0, 5.0, 0.0),
-        ],
-        1,
-    );
+    push_floor(&mut d, 1);
     Scene::build(d, 0.0).unwrap()
 }
 
@@ -154,40 +145,11 @@ fn textured_light_seen_directly() {
 
 #[test]
 fn mitsuba_quadrants() {
-    let dir = std::env::temp_dir().join(format!("kalos-textured-emission-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let mut pfm = b"PF\n2 2\n-1.0\n".to_vec();
-    // rows bottom to top
-    for c in [[1f32, 0., 0.], [0., 1., 0.], [0., 0., 1.], [1., 1., 0.]] {
-        for v in c {
-            pfm.extend(v.to_le_bytes());
-        }
-    }
-    std::fs::write(dir.join("quad.pfm"), pfm).unwrap();
-    let xml = r#"<scene version="3.0.0">
-  <integrator type="path"/>
-  <sensor type="perspective">
-    <float name="fov" value="30"/>
-    <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
-    <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
-    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/>
-      <rfilter type="box"/><string name="pixel_format" value="rgb"/></film>
-  </sensor>
-  <shape type="rectangle">
-    <transform name="to_world"><scale value="0.5"/></transform>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
-    <emitter type="area">
-      <texture name="radiance" type="bitmap">
-        <string name="filename" value="quad.pfm"/>
-        <string name="filter_type" value="nearest"/>
-      </texture>
-    </emitter>
-  </shape>
-</scene>"#;
-    let path = dir.join("scene.xml");
-    std::fs::write(&path, xml).unwrap();
-    let s = kalos::scene::load(path.to_str().unwrap()).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/textured-area-light/scene.xml"
+    );
+    let s = kalos::scene::load(path).unwrap();
     assert!(
         s.warnings.iter().all(|w| !w.contains("mean")),
         "{:?}",
