@@ -314,16 +314,7 @@ fn point_light_over_a_diffuse_plane() {
         }],
         ..Default::default()
     };
-    kalos::scene::builtin::push_quad(
-        &mut d,
-        [
-            Vec3::new(-5.0, -5.0, 0.0),
-            Vec3::new(5.0, -5.0, 0.0),
-            Vec3::new(5.0, 5.0, 0.0),
-            Vec3::new(-5.0, 5.0, 0.0),
-        ],
-        0,
-    );
+    push_floor(&mut d, 0);
     let scene = Scene::build(d, 0.0).unwrap();
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     let set = settings(&scene, 8, 8);

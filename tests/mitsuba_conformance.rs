@@ -44,14 +44,6 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
         "test_texturedprincipledthin_path",
         "83.32% of pixel-channels accepted with principledthin read (65.97% unread), its eval and pdf agreeing with Mitsuba's; not yet found",
     ),
-    (
-        "test_various_emitters_ptracer",
-        "0.82% of pixel-channels off (2026-12-06, 57e90ca): three quarters in image columns 160-223, the three area lights whose radiance is a bitmap (flower.bmp), which kalos renders with the bitmap's mean; the rest single pixels of the dark floor where kalos' path tracer has rare bright samples (the reference is Mitsuba's path tracer: bench/mitsuba-conformance.py renders ptracer files with it)",
-    ),
-    (
-        "test_various_shapes_path",
-        "1.2% of pixel-channels off (2026-12-06): the sdfgrid torus renders and passes; the failures lie along the checker edges of the disk, the PLY rectangle and the flat cube, seen at grazing angles; not measured why",
-    ),
 ];
 
 /// sRGB (linear) to CIE XYZ, as Mitsuba's `Bitmap.convert`.

@@ -608,7 +608,7 @@ fn connect<const N: usize>(
         if cos <= 0.0 {
             return None;
         }
-        let le = Spectrum::<N>::from_rgb(scene.lights.emitted(pt.light, cos));
+        let le = Spectrum::<N>::from_rgb(scene.lights.emitted_at(pt.light, cos, pt.p));
         return Some(Connection {
             l: pt.beta * le,
             sampled: None,

@@ -521,7 +521,7 @@ pub fn preview<const N: usize>(
         let wo = -ray.d;
         let front = wo.dot(hit.ng) > 0.0;
         if mat.is_emissive() && front {
-            l += beta * Spectrum::<N>::from_rgb(mat.emitted(wo.dot(hit.ng)));
+            l += beta * Spectrum::<N>::from_rgb(mat.emitted_at(wo.dot(hit.ng), hit.uv));
         }
         let bsdf = &mat.bsdf;
         if !bsdf.is_delta() || *bsdf == Bsdf::Black {

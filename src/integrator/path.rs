@@ -386,7 +386,7 @@ pub fn emission<const N: usize>(
     if !(mat.is_emissive() && cos_o > 0.0) {
         return None;
     }
-    let le = Spectrum::<N>::from_rgb(mat.emitted(cos_o));
+    let le = Spectrum::<N>::from_rgb(mat.emitted_at(cos_o, hit.uv));
     let w = if prev_delta {
         1.0
     } else {

@@ -51,7 +51,7 @@ fn trace<const N: usize>(
         let wo = -ray.d;
         let cos_o = wo.dot(hit.ng);
         if mat.is_emissive() && cos_o > 0.0 {
-            l += beta * Spectrum::<N>::from_rgb(mat.emitted(cos_o));
+            l += beta * Spectrum::<N>::from_rgb(mat.emitted_at(cos_o, hit.uv));
         }
         if segments >= max_segments {
             return l;

@@ -13,6 +13,14 @@
 //! radiance, R the radius of the scene's bounding sphere, the power it sends through a
 //! disk of the scene's size). With area lights only the choice is skipped, so such scenes
 //! render as before.
+//!
+//! An area light's radiance may be a texture (Mitsuba's area emitter with a textured
+//! `radiance`): `le` is then the texture's mean (for the choice by power and for the
+//! radiosity solution), and every estimator reads the texture at the point's uv: a
+//! sampled point's (`sample_position`), a hit's (`Material::emitted_at`) and a BDPT
+//! vertex's (`emitted_at`). Points are still sampled uniformly by area (Mitsuba samples
+//! the texture's image and maps it through the shape's uv parametrization; both are
+//! unbiased, kalos' without a second distribution per light).
 
 pub mod env;
 pub use env::EnvLight;
@@ -38,6 +46,44 @@ pub struct AreaLight {
     pub le: [f32; 3],
     /// Directional emission L_e(w) = 1 - a(cos theta) (see `Material::emission_table`).
     pub table: Option<Arc<AlbedoTable>>,
+    /// A texture of emitted radiance (`le` is its mean), looked up at the point's uv.
+    pub texture: Option<Arc<crate::texture::Texture>>,
+    /// The triangle's uvs at its three corners (barycentrics without texture coordinates,
+    /// as hits have them); read for a textured light only.
+    pub uv: [Vec2; 3],
+}
+
+impl AreaLight {
+    /// The texture coordinates at barycentrics (b1, b2) (p = v0 + b1 e1 + b2 e2).
+    #[inline]
+    fn uv_at(&self, b1: f32, b2: f32) -> Vec2 {
+        self.uv[0] * (1.0 - b1 - b2) + self.uv[1] * b1 + self.uv[2] * b2
+    }
+
+    /// Barycentrics (b1, b2) of a point `p` of the triangle's plane.
+    fn barycentrics(&self, p: Vec3) -> (f32, f32) {
+        let d = p - self.v0;
+        let (d00, d01, d11) = (
+            self.e1.dot(self.e1),
+            self.e1.dot(self.e2),
+            self.e2.dot(self.e2),
+        );
+        let (d20, d21) = (d.dot(self.e1), d.dot(self.e2));
+        let den = d00 * d11 - d01 * d01;
+        ((d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den)
+    }
+
+    /// The radiance of a textured light at barycentrics (b1, b2) (`le` without a texture).
+    #[inline]
+    fn radiance_at(&self, b1: f32, b2: f32) -> [f32; 3] {
+        match &self.texture {
+            None => self.le,
+            Some(t) => {
+                let uv = self.uv_at(b1, b2);
+                t.lookup(uv.x, uv.y)
+            }
+        }
+    }
 }
 
 /// A point sampled on an emitter.
@@ -266,12 +312,14 @@ pub struct Lights {
 }
 
 impl Lights {
-    /// The area lights of a scene: one per emissive triangle of positive area. An
-    /// emitter whose power overflows is refused (`TooBright`).
+    /// The area lights of a scene: one per emissive triangle of positive area (`uv_of`:
+    /// a triangle's texture coordinates, if it has them). An emitter whose power
+    /// overflows is refused (`TooBright`).
     pub fn new(
         tris: &[[Vec3; 3]],
         tri_material: &[u32],
         materials: &[Material],
+        uv_of: impl Fn(usize) -> Option<[Vec2; 3]>,
     ) -> Result<Lights, TooBright> {
         let mut lights = Vec::new();
         let mut light_of_tri = vec![u32::MAX; tris.len()];
@@ -297,6 +345,11 @@ impl Lights {
                 area,
                 le: m.emission,
                 table: m.emission_table.clone(),
+                texture: m.emission_texture.clone(),
+                uv: match m.emission_texture {
+                    Some(_) => uv_of(i).unwrap_or([Vec2::ZERO, Vec2::X, Vec2::Y]),
+                    None => [Vec2::ZERO; 3],
+                },
             });
         }
         let mut power: Vec<f32> = Vec::with_capacity(lights.len());
@@ -463,6 +516,17 @@ impl Lights {
         }
     }
 
+    /// [`Lights::emitted`] at point `p` of light `i` (a textured light's texture there).
+    #[inline(never)]
+    pub fn emitted_at(&self, i: u32, cos: f32, p: Vec3) -> [f32; 3] {
+        let l = &self.lights[i as usize];
+        if l.texture.is_none() {
+            return self.emitted(i, cos);
+        }
+        let (b1, b2) = l.barycentrics(p);
+        l.radiance_at(b1, b2)
+    }
+
     /// Light index of scene triangle `prim`, if it emits.
     #[inline]
     pub fn light_of(&self, prim: u32) -> Option<u32> {
@@ -488,7 +552,7 @@ impl Lights {
         Some(LightSample {
             p,
             n: l.n,
-            le: l.le,
+            le: l.radiance_at(b.x, b.y),
             directional: l.table.is_some(),
             pdf_area: pmf * self.p_area / l.area,
             light: i as u32,
@@ -525,6 +589,7 @@ mod tests {
             bsdf: Bsdf::Black,
             emission: le,
             emission_table: None,
+            emission_texture: None,
             kd_texture: None,
             one_sided: false,
             opacity: 1.0,
@@ -556,7 +621,7 @@ mod tests {
             ],
         ];
         let mats = [mat([1.0, 2.0, 3.0]), mat([5.0; 3]), mat([0.0; 3])];
-        let lights = Lights::new(&tris, &[0, 1, 2], &mats).unwrap();
+        let lights = Lights::new(&tris, &[0, 1, 2], &mats, |_| None).unwrap();
         assert_eq!(lights.len(), 2);
         assert_eq!(lights.light_of(2), None);
         let pdf = |w: Vec3| -> f32 {
@@ -585,7 +650,7 @@ mod tests {
     #[test]
     fn chi2_emission_direction() {
         let tris = [[Vec3::ZERO, Vec3::X, Vec3::Y]];
-        let lights = Lights::new(&tris, &[0], &[mat([1.0; 3])]).unwrap();
+        let lights = Lights::new(&tris, &[0], &[mat([1.0; 3])], |_| None).unwrap();
         let n = lights.get(0).n;
         let r = chi2_sphere(
             |_, u| Some(lights.sample_direction(0, u).0),

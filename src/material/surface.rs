@@ -14,6 +14,9 @@ pub struct Material {
     pub emission: [f32; 3],
     /// Directional emission L_e(w) = 1 - a(cos theta), a the directional albedo.
     pub emission_table: Option<Arc<AlbedoTable>>,
+    /// A texture of emitted radiance (Mitsuba's textured area emitter; `emission` is its
+    /// mean), read at a hit's uv by `emitted_at`.
+    pub emission_texture: Option<Arc<crate::texture::Texture>>,
     pub kd_texture: Option<u32>,
     /// Black on the back side (the geometric normal's): see `MaterialDesc::one_sided`.
     pub one_sided: bool,
@@ -46,6 +49,16 @@ impl Material {
         match &self.emission_table {
             None => self.emission,
             Some(t) => t.complement(cos),
+        }
+    }
+
+    /// [`Material::emitted`] at texture coordinates `uv` (the texture's radiance there
+    /// for a textured emitter).
+    #[inline]
+    pub fn emitted_at(&self, cos: f32, uv: glam::Vec2) -> [f32; 3] {
+        match &self.emission_texture {
+            None => self.emitted(cos),
+            Some(t) => t.lookup(uv.x, uv.y),
         }
     }
 }

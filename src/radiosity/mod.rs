@@ -22,7 +22,9 @@
 //! gather looks up (on `rw-room`, without them, every gather image was 0.5% too dark and
 //! the ceiling's top rows by 2.4-3.6%, median signed relative error). Emitters keep their
 //! exact emission E = pi L_e (the cosine-weighted average for directional emission) on
-//! their front side.
+//! their front side; an emitter whose radiance is a texture (Mitsuba's textured area
+//! light) emits its texture's mean over the whole element here, while the estimators
+//! that gather from the solution read the texture at each point they see or sample.
 
 pub mod mesh;
 pub mod ply;

@@ -4,6 +4,7 @@
 
 pub mod builtin;
 pub mod camera;
+mod emitter_names;
 pub mod hit;
 pub mod instance;
 pub mod mesh_attr;
@@ -40,6 +41,8 @@ pub struct MaterialDesc {
     pub ns: f32,
     pub ni: f32,
     pub ke: [f32; 3],
+    /// A texture of emitted radiance (Mitsuba's area emitter), `ke` its mean.
+    pub ke_texture: Option<Arc<Texture>>,
     pub illum: u8,
     pub map_kd: Option<PathBuf>,
     /// How `map_kd` is looked up (Mitsuba's bitmap `filter_type`, `wrap_mode`, `to_uv`).
@@ -200,6 +203,7 @@ impl MaterialDesc {
             ns: 1.0,
             ni: 1.5,
             ke: [0.0; 3],
+            ke_texture: None,
             illum: 2,
             map_kd: None,
             kd_sampling: texture::Sampling::default(),
@@ -426,6 +430,7 @@ impl Scene {
                 bsdf,
                 emission,
                 emission_table,
+                emission_texture: m.ke_texture.clone(),
                 kd_texture,
                 one_sided,
                 opacity: m.opacity.min(1.0),
@@ -448,31 +453,9 @@ impl Scene {
         )
         .map_err(|e| format!("scene {}: {e}", desc.name))?;
         let bvh_seconds = t0.elapsed().as_secs_f64();
-        // an emitter whose power overflows, named where the scene defines it
-        let too_bright = |e: crate::light::TooBright| {
-            use crate::light::TooBright as T;
-            let at =
-                |s: &Option<String>| s.as_deref().map(|s| format!("{s}: ")).unwrap_or_default();
-            let who = match e {
-                T::Area { material, .. } => {
-                    format!(
-                        "{} (emitter)",
-                        desc.materials[material as usize].described()
-                    )
-                }
-                T::Point { index, .. } => {
-                    format!("{}point light", at(&desc.point_lights[index].source))
-                }
-                T::Env { .. } => format!(
-                    "{}environment",
-                    at(&desc.environment.as_ref().and_then(|e| e.source.clone()))
-                ),
-                T::Total { .. } => format!("scene {}", desc.name),
-            };
-            format!("{who}: {}", e.describe())
-        };
-        let mut lights =
-            Lights::new(&desc.positions, &desc.material, &materials).map_err(too_bright)?;
+        let uv_of = |i: usize| uvs.get(i).copied();
+        let mut lights = Lights::new(&desc.positions, &desc.material, &materials, uv_of)
+            .map_err(|e| desc.too_bright(e))?;
         let env = match &desc.environment {
             Some(e) => Some(environment_light(e)?),
             None => None,
@@ -504,7 +487,7 @@ impl Scene {
         };
         lights
             .add_distant(points, env, radius)
-            .map_err(too_bright)?;
+            .map_err(|e| desc.too_bright(e))?;
         let mut warnings = desc.warnings;
         let mut camera_warning = None;
         let (camera, camera_how) = match desc.camera {

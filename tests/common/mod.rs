@@ -4,9 +4,10 @@
 use kalos::film::Film;
 use kalos::integrator::Integrator;
 use kalos::integrator::{IntegratorSettings, Roulette, RrMode};
+use kalos::math::Vec3;
 use kalos::pipeline::{render, Budget, RenderSettings, Silent};
 use kalos::sampling::{SamplerConfig, SamplerKind};
-use kalos::scene::Scene;
+use kalos::scene::{Scene, SceneDesc};
 use kalos::spectrum::SpectralMode;
 
 pub fn settings(scene: &Scene, w: u32, h: u32) -> RenderSettings {
@@ -70,4 +71,11 @@ pub fn assert_mean(film: &Film, expect: [f64; 3], k: f64, what: &str) {
             (m[c] - expect[c]).abs() / se[c]
         );
     }
+}
+
+/// The floor [-5, 5]^2 at z = 0, facing +z, of material `mat`.
+pub fn push_floor(d: &mut SceneDesc, mat: u32) {
+    let c = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+    let v = [c(-5.0, -5.0), c(5.0, -5.0), c(5.0, 5.0), c(-5.0, 5.0)];
+    kalos::scene::builtin::push_quad(d, v, mat);
 }

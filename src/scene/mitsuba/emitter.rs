@@ -66,6 +66,37 @@ impl<'a> Loader<'a> {
         Ok(())
     }
 
+    /// An area emitter's radiance: a constant, or a bitmap or checkerboard looked up at
+    /// the shape's uv (with its mean, for the choice among lights by power); a mesh
+    /// attribute is rendered with its scale, warned.
+    pub(super) fn area_radiance(
+        &mut self,
+        e: &'a El,
+    ) -> R<([f32; 3], Option<std::sync::Arc<crate::scene::Texture>>)> {
+        let texture = match self.color(e, "radiance", Use::Unbounded)? {
+            None => return Err(format!("{}: area emitter without a radiance", e.at)),
+            Some(Color::Rgb(v)) => return Ok((v, None)),
+            Some(Color::Bitmap(p, sampling)) => {
+                let mut t = crate::scene::Texture::load(&p)
+                    .map_err(|m| format!("{}: area emitter: {m}", e.at))?;
+                t.sampling = sampling;
+                t
+            }
+            Some(Color::Procedural(t)) => t,
+            Some(c @ Color::Attribute(_)) => {
+                self.warn(
+                    "texture in area emitter radiance",
+                    format!(
+                        "{}: a mesh attribute as area emitter 'radiance' is not supported: rendered with its scale",
+                        e.at
+                    ),
+                );
+                return Ok((self.mean_rgb(c, &e.at)?, None));
+            }
+        };
+        Ok((texture.mean(), Some(std::sync::Arc::new(texture))))
+    }
+
     pub(super) fn emitter(&mut self, el: &'a El) -> R<()> {
         let kind = el.kind();
         if !known_plugin("emitter", kind) {

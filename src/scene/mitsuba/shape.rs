@@ -89,9 +89,7 @@ impl<'a> Loader<'a> {
                     e.kind()
                 ));
             }
-            let radiance = self
-                .constant(e, "radiance", Use::Unbounded, "area emitter")?
-                .ok_or_else(|| format!("{}: area emitter without a radiance", e.at))?;
+            let (radiance, texture) = self.area_radiance(e)?;
             self.unused(e, "emitter 'area'");
             let mut m = self.desc.materials[mat as usize].clone();
             m.name = format!(
@@ -100,6 +98,7 @@ impl<'a> Loader<'a> {
                 e.at.rsplit(':').next().unwrap_or("")
             );
             m.ke = radiance;
+            m.ke_texture = texture;
             m.source = Some(e.at.clone());
             self.desc.materials.push(m);
             mat = self.desc.materials.len() as u32 - 1;
@@ -117,7 +116,10 @@ impl<'a> Loader<'a> {
         let mut xf = self.transform(el, "to_world")?;
         let mut flip = self.boolean(el, "flip_normals")?.unwrap_or(false);
         let face_normals = self.boolean(el, "face_normals")?.unwrap_or(false);
-        let flip_tex = self.boolean(el, "flip_tex_coords")?.unwrap_or(true);
+        // Mitsuba flips an OBJ's texture coordinates by default, not a PLY's
+        let flip_tex = self
+            .boolean(el, "flip_tex_coords")?
+            .unwrap_or(kind != "ply");
         // local mesh: positions, triangles, optional normals and uvs (kalos' v: up)
         let mesh = match kind {
             "obj" | "ply" => {
@@ -168,7 +170,7 @@ impl<'a> Loader<'a> {
                 m
             }
             "cube" => cube(),
-            "disk" => disk(128),
+            "disk" => disk(128, 16),
             "sphere" => {
                 let c = self.point(el, "center")?.unwrap_or(Vec3::ZERO);
                 let r = self.float(el, "radius")?.unwrap_or(1.0);
@@ -293,21 +295,34 @@ impl<'a> Loader<'a> {
     }
 }
 
+/// Mitsuba's cube, [-1, 1]^3, with its uvs: on each face an affine map of the position,
+/// ((a_u . p) + 1/2, (a_v . p) + 1/2) in Mitsuba's uv (v down the image), as Mitsuba's
+/// `ray_intersect` gives them (checked to 1e-7 at random points of every face); the
+/// face's two axes matter once the cube is scaled unevenly (a flat box's thin sides).
 pub(super) fn cube() -> crate::scene::ply::PlyMesh {
     let mut m = crate::scene::ply::PlyMesh {
         uvs: Some(Vec::new()),
         ..Default::default()
     };
-    for n in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
+    // (outward normal, a_u, a_v)
+    let faces = [
+        (Vec3::X, Vec3::Y * 0.5, Vec3::Z * -0.5),
+        (-Vec3::X, Vec3::Y * 0.5, Vec3::Z * 0.5),
+        (Vec3::Y, Vec3::X * -0.5, Vec3::Z * -0.5),
+        (-Vec3::Y, Vec3::Z * 0.5, Vec3::X * 0.5),
+        (Vec3::Z, Vec3::Y * 0.5, Vec3::X * 0.5),
+        (-Vec3::Z, Vec3::Y * -0.5, Vec3::X * 0.5),
+    ];
+    for (n, a_u, a_v) in faces {
         let u = n.any_orthonormal_vector();
         let v = n.cross(u);
         let b = m.positions.len() as u32;
         for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-            m.positions.push(n + u * x + v * y);
-            m.uvs
-                .as_mut()
-                .unwrap()
-                .push(Vec2::new((x + 1.0) * 0.5, (y + 1.0) * 0.5));
+            let p = n + u * x + v * y;
+            m.positions.push(p);
+            // kalos' v points up the image
+            let uv = Vec2::new(a_u.dot(p) + 0.5, 0.5 - a_v.dot(p));
+            m.uvs.as_mut().unwrap().push(uv);
         }
         m.triangles.push([b, b + 1, b + 2]);
         m.triangles.push([b, b + 2, b + 3]);
@@ -315,20 +330,42 @@ pub(super) fn cube() -> crate::scene::ply::PlyMesh {
     m
 }
 
-pub(super) fn disk(n: u32) -> crate::scene::ply::PlyMesh {
+/// Mitsuba's unit disk in the plane z = 0 with its polar uv (r, phi / 2 pi): `segs`
+/// sectors of `rings` rings, the seam's vertices doubled (phi 0 and 1) and each sector's
+/// centre vertex at the sector's middle angle, so that the interpolated uv follows the
+/// polar one (one centre vertex for all would give every sector's inner triangle the
+/// angle 0).
+pub(super) fn disk(segs: u32, rings: u32) -> crate::scene::ply::PlyMesh {
     let mut m = crate::scene::ply::PlyMesh {
-        uvs: Some(vec![Vec2::new(0.0, 1.0)]),
-        positions: vec![Vec3::ZERO],
+        uvs: Some(Vec::new()),
         ..Default::default()
     };
-    for i in 0..n {
-        let phi = std::f32::consts::TAU * i as f32 / n as f32;
-        m.positions.push(Vec3::new(phi.cos(), phi.sin(), 0.0));
-        m.uvs
-            .as_mut()
-            .unwrap()
-            .push(Vec2::new(1.0, 1.0 - i as f32 / n as f32));
-        m.triangles.push([0, 1 + i, 1 + (i + 1) % n]);
+    let vertex = |m: &mut crate::scene::ply::PlyMesh, r: f32, t: f32| {
+        let phi = std::f32::consts::TAU * t;
+        m.positions
+            .push(Vec3::new(r * phi.cos(), r * phi.sin(), 0.0));
+        // kalos' v points up the image
+        m.uvs.as_mut().unwrap().push(Vec2::new(r, 1.0 - t));
+        m.positions.len() as u32 - 1
+    };
+    // grid[j][i]: ring j + 1 (radius (j + 1) / rings), angle i / segs
+    let mut grid = Vec::new();
+    for j in 1..=rings {
+        let r = j as f32 / rings as f32;
+        let ring: Vec<u32> = (0..=segs)
+            .map(|i| vertex(&mut m, r, i as f32 / segs as f32))
+            .collect();
+        grid.push(ring);
+    }
+    for i in 0..segs as usize {
+        let c = vertex(&mut m, 0.0, (i as f32 + 0.5) / segs as f32);
+        m.triangles.push([c, grid[0][i], grid[0][i + 1]]);
+        for j in 0..rings as usize - 1 {
+            let (a, b) = (grid[j][i], grid[j + 1][i]);
+            let (cc, d) = (grid[j + 1][i + 1], grid[j][i + 1]);
+            m.triangles.push([a, b, cc]);
+            m.triangles.push([a, cc, d]);
+        }
     }
     m
 }
