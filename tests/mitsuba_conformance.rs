@@ -33,18 +33,6 @@ const VARIANCE_FLOOR: f64 = 1e-4;
 /// Scenes that do not pass yet, with the reason.
 const KNOWN_FAILURES: &[(&str, &str)] = &[
     (
-        "test_texturedprincipled1_path",
-        "59.95% of pixel-channels accepted with the main lobe anisotropic along the tangent (59.85% isotropic): the anisotropy is not the cause; not yet found",
-    ),
-    (
-        "test_texturedprincipled2_path",
-        "56.35% of pixel-channels accepted with the main lobe anisotropic along the tangent (56.12% isotropic): the anisotropy is not the cause; not yet found",
-    ),
-    (
-        "test_texturedprincipledthin_path",
-        "83.32% of pixel-channels accepted with principledthin read (65.97% unread), its eval and pdf agreeing with Mitsuba's; not yet found",
-    ),
-    (
         "test_various_emitters_ptracer",
         "0.82% of pixel-channels off (2026-12-06, 57e90ca): three quarters in image columns 160-223, the three area lights whose radiance is a bitmap (flower.bmp), which kalos renders with the bitmap's mean; the rest single pixels of the dark floor where kalos' path tracer has rare bright samples (the reference is Mitsuba's path tracer: bench/mitsuba-conformance.py renders ptracer files with it)",
     ),
