@@ -8,16 +8,17 @@ use crate::sampling::chi2::{assert_chi2, chi2_sphere, TestRng};
 /// The parameter sets of bench/mitsuba-principled-values.py.
 fn cases() -> [Principled; 6] {
     let d = Principled::default();
+    let first = Principled {
+        base_color: [0.2, 0.8, 0.1],
+        roughness: 0.15,
+        metallic: 0.7,
+        clearcoat: 0.9,
+        sheen: 0.2,
+        eta: eta_of_specular(0.7),
+        ..d
+    };
     [
-        Principled {
-            base_color: [0.2, 0.8, 0.1],
-            roughness: 0.15,
-            metallic: 0.7,
-            clearcoat: 0.9,
-            sheen: 0.2,
-            eta: eta_of_specular(0.7),
-            ..d
-        },
+        first,
         Principled {
             base_color: [0.3, 0.6, 0.8],
             roughness: 0.4,
@@ -59,15 +60,10 @@ fn cases() -> [Principled; 6] {
             eta: 1.4,
             ..d
         },
-        // specular 0 without spec_trans: eta 1, the main lobe off
+        // the first with specular 0 (no spec_trans): eta 1, the main lobe off
         Principled {
-            base_color: [0.2, 0.8, 0.1],
-            roughness: 0.15,
-            metallic: 0.7,
-            clearcoat: 0.9,
-            sheen: 0.2,
             eta: eta_of_specular(0.0),
-            ..d
+            ..first
         },
     ]
 }

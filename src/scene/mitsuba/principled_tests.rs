@@ -87,6 +87,7 @@ fn bad_principledthin_is_refused() {
 /// values from Mitsuba 3.9.1: hit point, direction towards the viewer, scattered
 /// direction, f |cos| in RGB).
 #[test]
+#[allow(clippy::excessive_precision)]
 fn checkered_principled_agrees_with_mitsuba() {
     type Hit = ([f32; 2], [f32; 3], [f32; 3], [f32; 3]);
     let (up, down) = ([0.3, 0.2, 0.9], [-0.3, -0.2, -0.8]);
