@@ -24,6 +24,10 @@ CASES = [
       "spec_trans": 0.4, "clearcoat": 0.3, "sheen": 0.2}, "ANISO"),
     ({"base_color": [0.2, 0.5, 0.9], "roughness": 0.3, "anisotropic": 1.0, "spec_trans": 0.8,
       "spec_tint": 0.5, "eta": 1.4}, "ANISO"),
+    # specular 0 without spec_trans: eta 1, where the dielectric Fresnel term is exactly 0
+    # and the main reflection lobe (its metallic part too) is off
+    ({"base_color": [0.2, 0.8, 0.1], "roughness": 0.15, "metallic": 0.7, "clearcoat": 0.9,
+      "sheen": 0.2, "specular": 0.0}, "ETA1"),
 ]
 
 
@@ -49,6 +53,19 @@ ANISO = [
     (d(150, 20), d(140, 190)),  # from inside, reflection
 ]
 
+# reflections at eta 1, grazing (wi.wh below 1/2, where the dielectric formula's rounding
+# residue is mostly not exactly 0 in single precision) (and the inside, where Mitsuba's pdf is NaN, left out)
+ETA1 = [
+    (d(30, 0), d(40, 180)),
+    (d(70, 0), d(70, 180)),
+    (d(80, 0), d(75, 180)),
+    (d(60, 0), d(80, 170)),
+    (d(85, 0), d(85, 180)),
+    (d(75, 30), d(65, 200)),
+    (d(65, 0), d(72, 150)),
+    (d(78, 10), d(60, 175)),
+]
+
 # principledthin: both hemispheres of wo from both sides (it transmits)
 THIN_CASES = [
     ({"base_color": [0.7, 0.1, 0.1], "roughness": 0.5, "anisotropic": 0.8, "spec_trans": 0.6,
@@ -67,7 +84,7 @@ def table(plugin, cases):
             n: ({"type": "rgb", "value": v} if isinstance(v, list) else v)
             for n, v in params.items()}})
         ctx = mi.BSDFContext()
-        for wi, wo in ANISO if pairs == "ANISO" else PAIRS:
+        for wi, wo in {"ANISO": ANISO, "ETA1": ETA1}.get(pairs, PAIRS):
             si = mi.SurfaceInteraction3f()
             si.p = [0, 0, 0]
             si.n = [0, 0, 1]

@@ -31,20 +31,7 @@ const SIGNIFICANCE: f64 = 0.01;
 const VARIANCE_FLOOR: f64 = 1e-4;
 
 /// Scenes that do not pass yet, with the reason.
-const KNOWN_FAILURES: &[(&str, &str)] = &[
-    (
-        "test_texturedprincipled1_path",
-        "59.95% of pixel-channels accepted with the main lobe anisotropic along the tangent (59.85% isotropic): the anisotropy is not the cause; not yet found",
-    ),
-    (
-        "test_texturedprincipled2_path",
-        "56.35% of pixel-channels accepted with the main lobe anisotropic along the tangent (56.12% isotropic): the anisotropy is not the cause; not yet found",
-    ),
-    (
-        "test_texturedprincipledthin_path",
-        "83.32% of pixel-channels accepted with principledthin read (65.97% unread), its eval and pdf agreeing with Mitsuba's; not yet found",
-    ),
-];
+const KNOWN_FAILURES: &[(&str, &str)] = &[];
 
 /// sRGB (linear) to CIE XYZ, as Mitsuba's `Bitmap.convert`.
 fn xyz(c: [f32; 3]) -> [f64; 3] {

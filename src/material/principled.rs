@@ -112,6 +112,19 @@ pub fn calc_schlick(r0: f32, cos_i: f32, eta: f32) -> f32 {
     w * (1.0 - r0) + r0
 }
 
+/// Mitsuba's `fresnel` (F, cos_t, eta_ti): the dielectric's, exactly 0 where the index is
+/// matched (eta 1, as `specular` 0 gives without `spec_trans`), where the formula leaves a
+/// rounding residue that would switch on the main lobe (its metallic part included).
+#[inline]
+fn fresnel_m(cos_i: f32, eta: f32) -> (f32, f32, f32) {
+    let r = fresnel_dielectric(cos_i, eta);
+    if eta == 1.0 {
+        (0.0, r.1, r.2)
+    } else {
+        r
+    }
+}
+
 /// ((eta - 1) / (eta + 1))^2.
 #[inline]
 pub fn schlick_r0(eta: f32) -> f32 {
@@ -300,7 +313,7 @@ impl Principled {
         let (brdf, bsdf) = self.weights();
         let front = cos_i > 0.0;
         let (wh, reflect, eta_path) = self.half(wi, wo);
-        let (f, _, _) = fresnel_dielectric(wi.dot(wh), self.eta);
+        let (f, _, _) = fresnel_m(wi.dot(wh), self.eta);
         let mf = self.mf();
         let d = mf.d(wh);
         let g = mf.g(wi, wo, wh);
@@ -403,7 +416,7 @@ impl Principled {
         }
         let front = cos_i > 0.0;
         let (wh, reflect, eta_path) = self.half(wi, wo);
-        let f = fresnel_dielectric(wi.dot(wh), self.eta).0;
+        let f = fresnel_m(wi.dot(wh), self.eta).0;
         let [ps, pt, pc, pd] = self.probs(front, f);
         let (dih, doh) = (wi.dot(wh), wo.dot(wh));
         let dwh_dwo = if reflect {
@@ -451,7 +464,7 @@ impl Principled {
         }
         let wi_up = if front { wi } else { -wi };
         let m = self.mf().sample_visible(wi_up, u);
-        let (f, cos_t, eta_ti) = fresnel_dielectric(wi.dot(m), self.eta);
+        let (f, cos_t, eta_ti) = fresnel_m(wi.dot(m), self.eta);
         let [_, pt, pc, pd] = self.probs(front, f);
         let wo = if u_lobe < pd {
             let wo = square_to_cosine_hemisphere(u);

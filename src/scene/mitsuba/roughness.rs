@@ -34,7 +34,7 @@ impl<'a> Loader<'a> {
         let at = p.at.clone();
         let texture = match p.tag.as_str() {
             "float" | "integer" => None,
-            _ => match self.color_of(p, Use::Unbounded)? {
+            _ => match self.color_of(p, Use::Unbounded)?.scalar_lookup() {
                 Color::Rgb(c) => return self.checked_alpha(name, &at, c[0]).map(Alpha::Value),
                 Color::Bitmap(path, sampling) => {
                     let mut t =
@@ -42,13 +42,6 @@ impl<'a> Loader<'a> {
                     t.sampling = sampling;
                     Some(t)
                 }
-                // Mitsuba's checkerboard (the one procedural texture): its eval_1, which a
-                // roughness reads, takes color0 where its colour lookup takes color1
-                Color::Procedural(t) if t.texels.len() == 4 => Some(Texture::checkerboard(
-                    t.texels[1],
-                    t.texels[0],
-                    t.sampling.to_uv,
-                )),
                 Color::Procedural(t) => Some(t),
                 Color::Attribute(_) => {
                     return Err(format!(

@@ -26,6 +26,20 @@ pub(super) enum Color {
     Attribute(crate::texture::mesh_attribute::MeshAttribute),
 }
 
+impl Color {
+    /// The colour as a float parameter reads it (Mitsuba's `eval_1`: roughnesses,
+    /// principled's scalars): a checkerboard's `eval_1` takes color0 where its colour
+    /// lookup (`eval`) takes color1, and color1 where it takes color0.
+    pub(super) fn scalar_lookup(self) -> Color {
+        match self {
+            Color::Procedural(t) if t.texels.len() == 4 => Color::Procedural(
+                crate::scene::Texture::checkerboard(t.texels[1], t.texels[0], t.sampling.to_uv),
+            ),
+            c => c,
+        }
+    }
+}
+
 /// What is said of a negative colour value.
 const NEGATIVE: &str = "a negative value (reflectances, radiances and indices are non-negative)";
 

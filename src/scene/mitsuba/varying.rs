@@ -75,7 +75,9 @@ impl<'a> Loader<'a> {
         let param = |name: &str, default: f32| -> R<Param> {
             match self.color(el, name, Use::Unbounded)? {
                 None => Ok(Param::Const([default; 3])),
-                Some(c) => self.param(c, &el.at),
+                // the colour by Mitsuba's `eval`, the scalars by its `eval_1`
+                Some(c) if name == "base_color" => self.param(c, &el.at),
+                Some(c) => self.param(c.scalar_lookup(), &el.at),
             }
         };
         let base_color = param("base_color", 0.5)?;
