@@ -46,20 +46,28 @@ pub struct AreaLight {
     pub le: [f32; 3],
     /// Directional emission L_e(w) = 1 - a(cos theta) (see `Material::emission_table`).
     pub table: Option<Arc<AlbedoTable>>,
-    /// A texture of emitted radiance (`le` is its mean), looked up at the point's uv.
-    pub texture: Option<Arc<crate::texture::Texture>>,
-    /// The triangle's uvs at its three corners (barycentrics without texture coordinates,
-    /// as hits have them); read for a textured light only.
+    /// A texture of emitted radiance (`le` is its mean), looked up at the point's uv; boxed
+    /// so that the untextured lights next-event estimation reads stay small.
+    pub texture: Option<Box<LightTexture>>,
+}
+
+/// A textured area light's texture and its triangle's uvs at the three corners
+/// (barycentrics for a triangle without texture coordinates, as hits have them).
+#[derive(Clone, Debug)]
+pub struct LightTexture {
+    pub texture: Arc<crate::texture::Texture>,
     pub uv: [Vec2; 3],
 }
 
-impl AreaLight {
+impl LightTexture {
     /// The texture coordinates at barycentrics (b1, b2) (p = v0 + b1 e1 + b2 e2).
     #[inline]
     fn uv_at(&self, b1: f32, b2: f32) -> Vec2 {
         self.uv[0] * (1.0 - b1 - b2) + self.uv[1] * b1 + self.uv[2] * b2
     }
+}
 
+impl AreaLight {
     /// Barycentrics (b1, b2) of a point `p` of the triangle's plane.
     fn barycentrics(&self, p: Vec3) -> (f32, f32) {
         let d = p - self.v0;
@@ -79,8 +87,8 @@ impl AreaLight {
         match &self.texture {
             None => self.le,
             Some(t) => {
-                let uv = self.uv_at(b1, b2);
-                t.lookup(uv.x, uv.y)
+                let uv = t.uv_at(b1, b2);
+                t.texture.lookup(uv.x, uv.y)
             }
         }
     }
@@ -345,11 +353,12 @@ impl Lights {
                 area,
                 le: m.emission,
                 table: m.emission_table.clone(),
-                texture: m.emission_texture.clone(),
-                uv: match m.emission_texture {
-                    Some(_) => uv_of(i).unwrap_or([Vec2::ZERO, Vec2::X, Vec2::Y]),
-                    None => [Vec2::ZERO; 3],
-                },
+                texture: m.emission_texture.as_ref().map(|t| {
+                    Box::new(LightTexture {
+                        texture: t.clone(),
+                        uv: uv_of(i).unwrap_or([Vec2::ZERO, Vec2::X, Vec2::Y]),
+                    })
+                }),
             });
         }
         let mut power: Vec<f32> = Vec::with_capacity(lights.len());
