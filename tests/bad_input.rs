@@ -227,6 +227,11 @@ fn bad_options_give_one_line_errors_naming_the_option() {
             &["--gather-rays 0"],
         ),
         (
+            "gather depth 0",
+            &["--gather", "radiosity", "--gather-depth", "0"],
+            &["--gather-depth"],
+        ),
+        (
             "gather rays too many",
             &["--gather", "radiosity", "--gather-rays", "5000"],
             &["--gather-rays 5000"],

@@ -359,7 +359,10 @@ pub fn render_rw(
 
     // 0. The gather's depth, unless named: the one a pilot predicts the least error for.
     let depth_budget = match budget {
-        RwBudget::Spp(spp) => Some(rw_depth::TrialBudget::PerPixel(spp)),
+        RwBudget::Spp(spp) => Some(rw_depth::TrialBudget::PerPixel {
+            trials: spp,
+            pixels: pixels as f64,
+        }),
         RwBudget::Time(secs) => Some(rw_depth::TrialBudget::Seconds {
             seconds: secs,
             pixels: pixels as f64,

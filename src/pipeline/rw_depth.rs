@@ -78,8 +78,8 @@ pub struct DepthEstimate {
 /// The budget the depth is chosen for.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TrialBudget {
-    /// Trials per pixel, whatever their cost.
-    PerPixel(f64),
+    /// Trials per pixel over this many pixels, whatever their cost.
+    PerPixel { trials: f64, pixels: f64 },
     /// Seconds for trials over this many pixels.
     Seconds { seconds: f64, pixels: f64 },
 }
@@ -109,7 +109,7 @@ impl DepthEstimate {
     /// Trials per pixel the budget allows at this depth.
     pub fn trials(&self, budget: TrialBudget) -> f64 {
         match budget {
-            TrialBudget::PerPixel(n) => n,
+            TrialBudget::PerPixel { trials, .. } => trials,
             TrialBudget::Seconds { seconds, pixels } => {
                 seconds / (self.seconds_per_trial.max(1e-12) * pixels.max(1.0))
             }
@@ -294,19 +294,11 @@ fn pilot_round(
     Ok(estimate_of(depth, &films, scale, seconds, rays))
 }
 
-/// The seconds a budget stands for (trials per pixel at the measured rate).
+/// The seconds a budget stands for (the trials over the image at the measured rate).
 fn budget_seconds(e: &DepthEstimate, budget: TrialBudget) -> f64 {
     match budget {
         TrialBudget::Seconds { seconds, .. } => seconds,
-        TrialBudget::PerPixel(n) => n * e.seconds_per_trial * pixels_of(budget),
-    }
-}
-
-/// The image's pixels in a budget (the pilot's own when it does not say).
-fn pixels_of(budget: TrialBudget) -> f64 {
-    match budget {
-        TrialBudget::Seconds { pixels, .. } => pixels,
-        TrialBudget::PerPixel(_) => (PILOT_SIDE * PILOT_SIDE) as f64,
+        TrialBudget::PerPixel { trials, pixels } => trials * e.seconds_per_trial * pixels,
     }
 }
 
@@ -353,7 +345,17 @@ mod tests {
     #[test]
     fn the_depth_moves_with_the_budget() {
         let d = [est(1, 1.0, 1e-6, 1e-4), est(2, 3.0, 1.5e-6, 1e-5)];
-        let at = |n: f64| least(&d, TrialBudget::PerPixel(n)).unwrap().depth;
+        let at = |n: f64| {
+            least(
+                &d,
+                TrialBudget::PerPixel {
+                    trials: n,
+                    pixels: 1.0,
+                },
+            )
+            .unwrap()
+            .depth
+        };
         // E_1 = 1/n + 1e-4, E_2 = 3/n + 1e-5: equal at n = 2 / 9e-5 ~ 22,222
         assert_eq!(at(1_000.0), 1);
         assert_eq!(at(100_000.0), 2);
@@ -373,7 +375,18 @@ mod tests {
         assert_eq!(secs(1.0), 2);
         // a negative error estimate counts as none, not as a gain
         let e = [est(1, 1.0, 1e-6, 0.0), est(2, 1.0, 1e-6, -1.0)];
-        assert_eq!(least(&e, TrialBudget::PerPixel(10.0)).unwrap().depth, 1);
+        assert_eq!(
+            least(
+                &e,
+                TrialBudget::PerPixel {
+                    trials: 10.0,
+                    pixels: 1.0
+                }
+            )
+            .unwrap()
+            .depth,
+            1
+        );
     }
 
     /// On the Cornell box the coarse solution (a few hundred elements) is far from the fine
@@ -398,7 +411,10 @@ mod tests {
             &scene,
             &integ,
             &set,
-            TrialBudget::PerPixel(1e6),
+            TrialBudget::PerPixel {
+                trials: 1e6,
+                pixels: 32.0 * 32.0,
+            },
             &crate::progress::Silent,
         )
         .unwrap()

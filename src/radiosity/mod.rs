@@ -322,24 +322,24 @@ impl Solution {
         progress: &dyn Progress,
     ) -> Result<Solution, String> {
         let budget = set.time_budget.filter(|t| t.is_finite() && *t > 0.0);
+        let meshed = Meshed::of(scene);
         if set.max_area.is_some() || set.default_elements <= ROULETTE_ELEMENTS {
-            return Self::compute_mesh(scene, set, bands, progress);
+            return Self::compute_mesh(scene, set, &meshed, bands, progress);
         }
         // element counts are cheap (no solve): a coarse solve that the default mesh would
         // hardly refine is not made without a budget
-        let meshed = Meshed::of(scene);
         let n_coarse = meshed.elements(ROULETTE_ELEMENTS) as f64;
         let refines = |default_elements: f64| {
             meshed.elements(default_elements) as f64 >= MIN_REFINEMENT * n_coarse
         };
         if budget.is_none() && !refines(set.default_elements) {
-            return Self::compute_mesh(scene, set, bands, progress);
+            return Self::compute_mesh(scene, set, &meshed, bands, progress);
         }
         let coarse_set = RadiositySettings {
             default_elements: ROULETTE_ELEMENTS,
             ..*set
         };
-        let coarse = Self::compute_mesh(scene, &coarse_set, bands, progress)?;
+        let coarse = Self::compute_mesh(scene, &coarse_set, &meshed, bands, progress)?;
         let elements = match budget {
             Some(seconds) => {
                 // the finest mesh whose solve, predicted from the coarse one's as time ~
@@ -373,7 +373,7 @@ impl Solution {
             default_elements: elements,
             ..*set
         };
-        let mut fine = Self::compute_mesh(scene, &fine_set, bands, progress)?;
+        let mut fine = Self::compute_mesh(scene, &fine_set, &meshed, bands, progress)?;
         fine.coarser = Some(Arc::new(coarse));
         Ok(fine)
     }
@@ -382,6 +382,7 @@ impl Solution {
     fn compute_mesh(
         scene: &Scene,
         set: &RadiositySettings,
+        meshed: &Meshed,
         bands: usize,
         progress: &dyn Progress,
     ) -> Result<Solution, String> {
@@ -395,7 +396,8 @@ impl Solution {
             areas,
             area_total,
             any_diffuse,
-        } = Meshed::of(scene);
+        } = meshed;
+        let (area_total, any_diffuse) = (*area_total, *any_diffuse);
         let nt = scene.tris.len();
         if !any_diffuse {
             return Err(format!(
@@ -411,7 +413,7 @@ impl Solution {
             Some(a) => a as f64,
             None => area_total / set.default_elements,
         };
-        let levels = levels_for(&areas, max_area);
+        let levels = levels_for(areas, max_area);
         // --- refuse a mesh too fine before allocating it
         let (ne, nv) = mesh::count(&levels);
         let bytes = ne as f64 * (std::mem::size_of::<mesh::Element>() + 48 * bands) as f64
