@@ -162,8 +162,20 @@ pub fn radiance<const N: usize>(
     l_tilde: &LTilde<N>,
     c: &mut Counters,
 ) -> Spectrum<N> {
+    let mut seen = Spectrum::ZERO;
     if set.gather != Gather::Correction {
-        return estimate(scene, sol, ray, s, set, gather_depth, l_tilde, false, c);
+        return estimate(
+            scene,
+            sol,
+            ray,
+            s,
+            set,
+            gather_depth,
+            l_tilde,
+            false,
+            &mut seen,
+            c,
+        );
     }
     let mut s_lookup = *s;
     let lookup = estimate(
@@ -175,10 +187,57 @@ pub fn radiance<const N: usize>(
         gather_depth,
         l_tilde,
         false,
+        &mut seen,
         c,
     );
     c.paths -= 1;
-    estimate(scene, sol, ray, s, set, gather_depth, l_tilde, true, c) - lookup
+    estimate(
+        scene,
+        sol,
+        ray,
+        s,
+        set,
+        gather_depth,
+        l_tilde,
+        true,
+        &mut seen,
+        c,
+    ) - lookup
+}
+
+/// One sample of the lookup and, from the same path, the light it sees directly: the
+/// emission its camera ray reaches through mirrors and glass only (the branch the path
+/// took at glass, so its mean is `visible::emission`'s, which the split needs no more: the
+/// two parts sum to the sample whatever the second is). Saves tracing the camera ray twice.
+#[allow(clippy::too_many_arguments)]
+pub fn radiance_split<const N: usize>(
+    scene: &Scene,
+    sol: &Solution,
+    ray: Ray,
+    s: &mut SampleStream,
+    set: &IntegratorSettings,
+    gather_depth: u32,
+    l_tilde: &LTilde<N>,
+    c: &mut Counters,
+) -> (Spectrum<N>, Spectrum<N>) {
+    debug_assert!(
+        set.gather == Gather::Radiosity,
+        "the split is of the lookup's samples"
+    );
+    let mut seen = Spectrum::ZERO;
+    let l = estimate(
+        scene,
+        sol,
+        ray,
+        s,
+        set,
+        gather_depth,
+        l_tilde,
+        false,
+        &mut seen,
+        c,
+    );
+    (l, seen)
 }
 
 /// One sample of the lookup (`cv` false) or of the control variate (`cv` true): the
@@ -195,9 +254,12 @@ fn estimate<const N: usize>(
     gather_depth: u32,
     l_tilde: &LTilde<N>,
     cv: bool,
+    seen: &mut Spectrum<N>,
     c: &mut Counters,
 ) -> Spectrum<N> {
     let mut l = Spectrum::<N>::ZERO;
+    // whether every vertex so far was a mirror or glass: emission now is seen directly
+    let mut direct = true;
     // traced throughput, and the diffuse part waiting for its lookup
     let mut beta = Spectrum::<N>::ONE;
     let mut beta_d = Spectrum::<N>::ZERO;
@@ -222,10 +284,15 @@ fn estimate<const N: usize>(
         // Emission, MIS-weighted against NEE, for the traced and the waiting parts.
         // (with the control variate only the traced part: the lookup is reflected light)
         if let Some((le, w)) = emission::<N>(scene, mat, &hit, wo, prev_pdf, prev_delta) {
-            l += if cv { beta } else { beta + beta_d } * le * w;
+            let e = if cv { beta } else { beta + beta_d } * le * w;
+            l += e;
+            if direct {
+                *seen += e;
+            }
         }
 
         let bsdf = scene.bsdf_at(mat, &hit, wo);
+        direct &= bsdf.is_delta();
 
         // The waiting diffuse part: (B - E)/pi at the first diffuse-like hit.
         if !beta_d.is_black() && !bsdf.is_delta() {

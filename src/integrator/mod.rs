@@ -321,6 +321,21 @@ impl Integrator {
             && !(self.radiosity.is_some() && self.set.gather.reads_solution())
     }
 
+    /// Whether the path tracer's samples are the radiosity gather's lookups
+    /// (`--gather radiosity` with its solution).
+    fn gathers(&self) -> bool {
+        self.set.kind == IntegratorKind::Path
+            && self.radiosity.is_some()
+            && self.set.gather == Gather::Radiosity
+    }
+
+    /// The gather's depth (`--gather-depth`, or the paper's first diffuse bounce).
+    fn gather_depth(&self) -> u32 {
+        self.set
+            .gather_depth
+            .unwrap_or(gather::DEFAULT_GATHER_DEPTH)
+    }
+
     /// Whether [`Layer::Direct`] means anything here: BDPT, whose camera subpath already
     /// carries the emission seen directly (its s = 0 strategies through Dirac vertices
     /// only), so the split costs no ray.
@@ -358,6 +373,22 @@ impl Integrator {
             let (v, part) = match layer {
                 Layer::None if !sink.wants_strategies() => {
                     (self.one::<N>(ctx, &cs, &mut s, sink, c), [0.0; 3])
+                }
+                Layer::Visible if self.gathers() => {
+                    // the lookup's path gives the light it sees directly
+                    let ray = camera_ray(ctx.cam, cs.x, cs.y, &mut s);
+                    let (sol, depth) = (self.radiosity.as_ref().unwrap(), self.gather_depth());
+                    let (l, f) = gather::radiance_split::<N>(
+                        ctx.scene,
+                        sol,
+                        ray,
+                        &mut s,
+                        &self.set,
+                        depth,
+                        &self.l_tilde::<N>(),
+                        c,
+                    );
+                    (l.to_rgb(), f.to_rgb())
                 }
                 Layer::Visible => {
                     // f(ray) from a copy of the stream: the sample itself draws the same
@@ -499,9 +530,7 @@ impl Integrator {
                         ray,
                         s,
                         &self.set,
-                        self.set
-                            .gather_depth
-                            .unwrap_or(gather::DEFAULT_GATHER_DEPTH),
+                        self.gather_depth(),
                         &l_tilde(),
                         c,
                     )
