@@ -16,12 +16,13 @@ SHA-256, and writes into scenes/ifc/public/ (ignored by git):
     public/copyright-assimp           the package's copyright file, as shipped
     public/SOURCE.txt                 package, version, SHA-256, licence, what was changed
     public/fzk-haus.obj, .mtl         the triangles and materials, converted as below
-    public/fzk-haus.toml              the scene kalos renders: the OBJ, a camera, a sky
+    public/sky.obj, sky.mtl           the sky: an emitting box around the model
+    public/fzk-haus.toml              the scene kalos renders: both OBJs and a camera
     public/venv/                      the converter's Python environment
 
 IFC is a building model, not a mesh: walls are extruded profiles with the window openings
 cut out, furniture is boundary representations. The conversion is IfcOpenShell's
-(`ifcopenshell` 0.9.0.post1 from PyPI, LGPL-3.0, installed by this script into
+(`ifcopenshell` 0.9.0.post1 from PyPI, LGPL-3.0-or-later, installed by this script into
 public/venv), a tool outside the renderer: every element's triangles in world coordinates
 (metres, z up) with IfcOpenShell's normals, except the opening volumes and the room volumes
 (IfcOpeningElement, IfcSpace), which are not surfaces. Each IFC surface style becomes one
@@ -32,9 +33,13 @@ glass furniture parts) is written as glass (`illum 7`, `Ni 1.5`, the index of wi
 since an IFC transparency asks for a see-through pane.
 
 The model has no light, as an architect's model has none: it is lit as such a house is,
-by daylight through its windows: a uniform sky of radiance 1 around it (`[environment]`),
-above the model's own site plane. The camera (below) stands in the ground floor's living
-room, looking along it; it is this script's choice.
+by daylight through its windows: a uniform sky of radiance 1 around it, beyond the model's
+own site plane. The sky is a closed box of emitting triangles facing inwards (sky.obj,
+`Ke 1 1 1`, `Kd 0`), 5 m outside the model's bounds: inside it every direction sees
+radiance 1, as under a constant environment, but as an area light it is one that every
+estimator kalos has can sample (BDPT and the radiosity solution know area lights only).
+The camera (below) stands in the ground floor's living room, looking along it; it is
+this script's choice.
 
 Usage (from anywhere; needs apt-get with Debian's package lists, pip, and network access
 to Debian and PyPI):
@@ -71,6 +76,7 @@ GLASS_IOR = 1.5
 CAMERA = ((4.3, 0.8, 1.6), (11.0, 3.0, 1.0), (0.0, 0.0, 1.0), 70.0)
 RES = (160, 120)
 SKY_RADIANCE = 1.0
+SKY_MARGIN = 5.0  # metres between the model's bounds and the sky box
 
 
 def sha256(path):
@@ -162,11 +168,41 @@ def convert(ifc_path, obj_path, mtl_path):
     print(f"{obj_path}: {tris} triangles, {len(materials)} materials")
 
 
-def write_toml(path, obj_name):
+def obj_bounds(obj_path):
+    lo, hi = [float("inf")] * 3, [float("-inf")] * 3
+    with open(obj_path, encoding="utf-8") as f:
+        for line in f:
+            if line.startswith("v "):
+                p = [float(c) for c in line.split()[1:4]]
+                lo = [min(a, b) for a, b in zip(lo, p)]
+                hi = [max(a, b) for a, b in zip(hi, p)]
+    return lo, hi
+
+
+def write_sky(obj_path, mtl_path, lo, hi):
+    """A closed box SKY_MARGIN outside (lo, hi), every face emitting towards the inside."""
+    lo = [c - SKY_MARGIN for c in lo]
+    hi = [c + SKY_MARGIN for c in hi]
+    corner = [(x, y, z) for z in (lo[2], hi[2]) for y in (lo[1], hi[1]) for x in (lo[0], hi[0])]
+    # Corners indexed x + 2y + 4z (1-based in the OBJ); each quad counter-clockwise as seen
+    # from inside the box, the side `Ke` emits on.
+    quads = ((1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4))
+    with open(mtl_path, "w", encoding="utf-8") as f:
+        f.write(f"newmtl sky\nKd 0 0 0\nKs 0 0 0\nKe {SKY_RADIANCE:g} {SKY_RADIANCE:g} "
+                f"{SKY_RADIANCE:g}\nillum 2\n")
+    with open(obj_path, "w", encoding="utf-8") as f:
+        f.write(f"# A uniform sky around the FZK-Haus; see SOURCE.txt\nmtllib "
+                f"{os.path.basename(mtl_path)}\n")
+        f.writelines(f"v {x:g} {y:g} {z:g}\n" for x, y, z in corner)
+        f.write("usemtl sky\n")
+        f.writelines(f"f {a} {b} {c} {d}\n" for a, b, c, d in quads)
+
+
+def write_toml(path, obj_name, sky_name):
     (o, t, u, fov) = CAMERA
     vec = lambda p: "[" + ", ".join(f"{c:g}" for c in p) + "]"  # noqa: E731
     with open(path, "w", encoding="utf-8") as f:
-        f.write(f"""# The FZK-Haus (KIT / IAI) lit by a uniform sky; see SOURCE.txt
+        f.write(f"""# The FZK-Haus (KIT / IAI) under a uniform sky; see SOURCE.txt
 [camera]
 origin = {vec(o)}
 target = {vec(t)}
@@ -179,8 +215,8 @@ res = [{RES[0]}, {RES[1]}]
 [[objects]]
 file = "{obj_name}"
 
-[environment]
-radiance = [{SKY_RADIANCE:g}, {SKY_RADIANCE:g}, {SKY_RADIANCE:g}]
+[[objects]]
+file = "{sky_name}"
 """)
 
 
@@ -210,18 +246,21 @@ def main():
     mtl = os.path.join(args.out, "fzk-haus.mtl")
     subprocess.run([venv_python(args.out), os.path.abspath(__file__), "--convert", ifc, obj, mtl],
                    check=True)
-    write_toml(os.path.join(args.out, "fzk-haus.toml"), os.path.basename(obj))
+    write_sky(os.path.join(args.out, "sky.obj"), os.path.join(args.out, "sky.mtl"),
+              *obj_bounds(obj))
+    write_toml(os.path.join(args.out, "fzk-haus.toml"), os.path.basename(obj), "sky.obj")
     with open(os.path.join(args.out, "SOURCE.txt"), "w", encoding="utf-8") as f:
         f.write(f"""Package: {PACKAGE} {VERSION} (Debian), SHA-256 {SHA256}
 Model: {IFC_IN_DEB}, by KIT / IAI (Karlsruhe Institute of Technology), ArchiCAD 14, 2010
 Licence: the package BSD-3-Clause (copyright-assimp); the model "used with permission and
 fine to redistribute, KIT/IAI would appreciate if the attribution was retained"
 (AC14-FZK-Haus.source.txt)
-Converted by: {CONVERTER} (PyPI, LGPL-3.0), in venv/
+Converted by: {CONVERTER} (PyPI, LGPL-3.0-or-later), in venv/
 Written: fzk-haus.obj SHA-256 {sha256(obj)}, fzk-haus.mtl SHA-256 {sha256(mtl)}
 Changed: openings and room volumes left out; surface styles written as Lambertian Kd, the
 transparent style as glass (illum 7, Ni {GLASS_IOR}); a uniform sky of radiance
-{SKY_RADIANCE:g} and a camera added (fzk-haus.toml); see scenes/ifc/fetch_fzk_haus.py
+{SKY_RADIANCE:g} (sky.obj: an emitting box {SKY_MARGIN:g} m outside the model's bounds) and a
+camera added (fzk-haus.toml); see scenes/ifc/fetch_fzk_haus.py
 """)
     print(f"wrote {args.out}")
 
