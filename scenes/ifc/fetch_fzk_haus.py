@@ -24,8 +24,9 @@ IFC is a building model, not a mesh: walls are extruded profiles with the window
 cut out, furniture is boundary representations. The conversion is IfcOpenShell's
 (`ifcopenshell` 0.9.0.post1 from PyPI, LGPL-3.0-or-later, installed by this script into
 public/venv), a tool outside the renderer: every element's triangles in world coordinates
-(metres, z up) with IfcOpenShell's normals, except the opening volumes and the room volumes
-(IfcOpeningElement, IfcSpace), which are not surfaces. Each IFC surface style becomes one
+(metres, z up), except the opening volumes and the room volumes (IfcOpeningElement,
+IfcSpace), which are not surfaces. IfcOpenShell gives no vertex normals for this model:
+every facet is shaded flat, as the model is faceted (its curved furniture included). Each IFC surface style becomes one
 MTL material: `Kd` is the style's diffuse colour as IfcOpenShell computes it; the styles
 give a specular colour but no highlight exponent, so they are written diffuse; the one
 transparent style (transparency 0.88: the panes of the windows, the glazed doors and two
@@ -119,19 +120,14 @@ def convert(ifc_path, obj_path, mtl_path):
     if not it.initialize():
         sys.exit(f"{ifc_path}: IfcOpenShell found no geometry")
     materials = {}  # style name -> (name in the MTL, diffuse, glass)
-    groups = {}  # MTL name -> list of triangles, each three (v, vn) indices (vn 0: none)
-    verts, normals = [], []
+    groups = {}  # MTL name -> list of triangles (three 1-based vertex indices)
+    verts = []
     while True:
         shape = it.get()
         geom = shape.geometry
-        base, nbase = len(verts), len(normals)
-        v, n = geom.verts, geom.normals
+        base = len(verts)
+        v = geom.verts
         verts.extend(tuple(v[i:i + 3]) for i in range(0, len(v), 3))
-        # IfcOpenShell gives no normals for some elements (the site's faceted terrain):
-        # those triangles are written without vn and kalos shades them flat.
-        has_normals = len(n) == len(v)
-        if has_normals:
-            normals.extend(tuple(n[i:i + 3]) for i in range(0, len(n), 3))
         names = []
         for m in geom.materials:
             if m.name not in materials:
@@ -143,9 +139,7 @@ def convert(ifc_path, obj_path, mtl_path):
         for t in range(len(f) // 3):
             mid = ids[t] if t < len(ids) else -1
             name = names[mid] if 0 <= mid < len(names) else "unstyled"
-            tri = tuple((base + f[3 * t + k] + 1, nbase + f[3 * t + k] + 1 if has_normals else 0)
-                        for k in range(3))
-            groups.setdefault(name, []).append(tri)
+            groups.setdefault(name, []).append(tuple(base + f[3 * t + k] + 1 for k in range(3)))
         if not it.next():
             break
     with open(mtl_path, "w", encoding="utf-8") as out:
@@ -155,15 +149,13 @@ def convert(ifc_path, obj_path, mtl_path):
             out.write(f"Ni {GLASS_IOR}\nillum 7\n" if glass else "Ks 0 0 0\nillum 2\n")
         if "unstyled" in groups:
             out.write("\nnewmtl unstyled\nKd 0.8 0.8 0.8\nKs 0 0 0\nillum 2\n")
-    corner = lambda c: f"{c[0]}//{c[1]}" if c[1] else f"{c[0]}"  # noqa: E731
     with open(obj_path, "w", encoding="utf-8") as out:
         out.write(f"# From {os.path.basename(ifc_path)} by IfcOpenShell; see SOURCE.txt\n")
         out.write(f"mtllib {os.path.basename(mtl_path)}\n")
         out.writelines(f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in verts)
-        out.writelines(f"vn {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in normals)
         for name in sorted(groups):
             out.write(f"usemtl {name}\n")
-            out.writelines("f " + " ".join(corner(c) for c in tri) + "\n" for tri in groups[name])
+            out.writelines(f"f {a} {b} {c}\n" for a, b, c in groups[name])
     tris = sum(len(g) for g in groups.values())
     print(f"{obj_path}: {tris} triangles, {len(materials)} materials")
 
