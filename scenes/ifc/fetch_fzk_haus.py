@@ -26,12 +26,13 @@ cut out, furniture is boundary representations. The conversion is IfcOpenShell's
 public/venv), a tool outside the renderer: every element's triangles in world coordinates
 (metres, z up), except the opening volumes and the room volumes (IfcOpeningElement,
 IfcSpace), which are not surfaces. IfcOpenShell gives no vertex normals for this model:
-every facet is shaded flat, as the model is faceted (its curved furniture included). Each IFC surface style becomes one
-MTL material: `Kd` is the style's diffuse colour as IfcOpenShell computes it; the styles
-give a specular colour but no highlight exponent, so they are written diffuse; the one
-transparent style (transparency 0.88: the panes of the windows, the glazed doors and two
-glass furniture parts) is written as glass (`illum 7`, `Ni 1.5`, the index of window glass),
-since an IFC transparency asks for a see-through pane.
+every facet is shaded flat, as the model is faceted (its curved furniture included). Each
+IFC surface style becomes one MTL material: `Kd` is the style's diffuse colour as
+IfcOpenShell computes it; the styles give a specular colour but no highlight exponent, so
+they are written diffuse; the one transparent style (transparency 0.88: the panes of the
+windows and glazed doors, and the furniture's glass) is written as glass (`illum 7`,
+`Ni 1.5`, the index of window glass; the panes are 2 cm solid boxes), since an IFC
+transparency asks for a see-through pane.
 
 The model has no light, as an architect's model has none: it is lit as such a house is,
 by daylight through its windows: a uniform sky of radiance 1 around it, beyond the model's
@@ -81,11 +82,8 @@ SKY_MARGIN = 5.0  # metres between the model's bounds and the sky box
 
 
 def sha256(path):
-    h = hashlib.sha256()
     with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
+        return hashlib.file_digest(f, "sha256").hexdigest()  # Python 3.11
 
 
 def fetch_deb(dest):
