@@ -272,6 +272,8 @@ pub const CEILING_QUANTILE: f64 = 0.9;
 /// (measured on cornell at D 5, 100x100, without the gather: 0.833 of the pixels converged
 /// with the 0.9 quantile, 0.886 with 0.95, 0.902 with 0.97; with the gather 0.949).
 pub const STEIN_QUANTILE: f64 = 0.97;
+/// Passes the first Mt trials are split into under a deadline (`--time`).
+const FIRST_CHUNKS: u32 = 8;
 
 /// Per-pixel means of a film, plus those of a second film of the same size.
 fn sum_means(a: &Film, b: Option<&Film>) -> Vec<[f64; 3]> {
@@ -476,7 +478,6 @@ pub fn render_rw(
     let predicted_trials = predicted(&needs, mt as f64);
 
     // 2. Trials: Mt everywhere, then passes for the pixels not yet converged.
-    let t1 = Instant::now();
     let mut film = Film::new(set.width, set.height)?;
     let mut vfilm = Film::new(set.width, set.height)?;
     let first = mt.min((cap_total / pixels.max(1) as u64).min(u32::MAX as u64) as u32);
@@ -496,10 +497,9 @@ pub fn render_rw(
         };
         run(&p, film, vfilm)
     };
-    counters.add(&pass(Counts::Uniform(first), 0, &mut film, &mut vfilm));
-    // The correction's samples (their own stream 2), before the passes a deadline trims.
-    // Two independent halves (streams 2 and 3): `rw_bias::correction` weighs each by the
-    // other.
+    // The correction's samples (their own streams 2 and 3) first, their share of the
+    // budget taken out of Mt above: the deadline then trims only the trials. Two
+    // independent halves: `rw_bias::correction` weighs each by the other.
     let mut cfilms = [
         Film::new(set.width, set.height)?,
         Film::new(set.width, set.height)?,
@@ -525,10 +525,38 @@ pub fn render_rw(
             ));
         }
     }
+    // Mt for every pixel; under a deadline in `FIRST_CHUNKS` passes, the last ones fitted
+    // to the time left at the rate measured (the pilot's rate can be off: one pass of Mt
+    // ran 18 s past an 80-s budget).
+    let t1 = Instant::now();
+    let mut done = 0u32; // trials of every pixel still running
+    let mut passes = 0u32;
+    while done < first && !progress.cancelled() {
+        let mut k = match deadline {
+            None => first,
+            Some(_) => first.div_ceil(FIRST_CHUNKS).min(first - done),
+        };
+        if let (Some(dl), true) = (deadline, done > 0) {
+            let per_trial = t1.elapsed().as_secs_f64() / (done as f64 * pixels as f64);
+            let left = dl - t0.elapsed().as_secs_f64();
+            let fit = left / (per_trial * pixels as f64).max(1e-12);
+            k = k.min(fit.clamp(0.0, u32::MAX as f64) as u32);
+            if k == 0 {
+                break;
+            }
+        }
+        counters.add(&pass(
+            Counts::Uniform(k),
+            done as u64,
+            &mut film,
+            &mut vfilm,
+        ));
+        done += k;
+        passes += 1;
+    }
+    let first = done;
     let mut trials = vec![first; pixels];
-    let mut done = first; // trials of every pixel still running
     let mut spent = first as u64 * pixels as u64;
-    let mut passes = 1u32;
     let (w, h) = (set.width as usize, set.height as usize);
     let conv_map = |film: &Film, vis: &Film| {
         let s_p = test_deviations(film, split.then_some(vis));
@@ -581,10 +609,6 @@ pub fn render_rw(
     // With --time, once every pixel has converged or reached the ceiling, what is left of
     // the time goes to every pixel (more trials never hurt; stopping early wasted 10%).
     let mut extend = false;
-    // the trials' phase so far in trials (a correction sample costs CORRECTION_COST)
-    let phase_trials = |spent: u64| {
-        spent as f64 + rw_bias::CORRECTION_COST * (correction_samples as u64 * pixels as u64) as f64
-    };
     while !progress.cancelled() {
         let mut n_active = active.iter().filter(|&&a| a).count() as u64;
         if done >= ceiling || n_active == 0 {
@@ -606,7 +630,7 @@ pub fn render_rw(
         if let Some(dl) = deadline {
             // as many trials as the time left holds, at the rate measured so far
             let left = dl - t0.elapsed().as_secs_f64();
-            let per_trial = t1.elapsed().as_secs_f64() / phase_trials(spent).max(1.0);
+            let per_trial = t1.elapsed().as_secs_f64() / (spent as f64).max(1.0);
             let fit = left / (per_trial * n_active as f64).max(1e-12);
             if fit < 1.0 {
                 break;
