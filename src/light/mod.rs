@@ -676,6 +676,44 @@ mod tests {
     }
 
     #[test]
+    fn untextured_lights_sample_without_textures() {
+        // An area light is as large as before textured emission (its texture is kept
+        // beside it): light sampling reads no more memory per light.
+        assert!(std::mem::size_of::<AreaLight>() <= 80);
+        let tris = [
+            [Vec3::ZERO, Vec3::X, Vec3::Y],
+            [Vec3::Z, Vec3::Z + Vec3::X, Vec3::Z + Vec3::Y],
+        ];
+        let plain = Lights::new(&tris, &[0, 0], &[mat([1.0; 3])], |_| None).unwrap();
+        assert!(plain.textures.is_empty());
+        // One textured light among untextured ones: each light's own radiance.
+        let mut textured = mat([0.5; 3]);
+        let checker = crate::texture::Texture::checkerboard(
+            [0.0; 3],
+            [1.0; 3],
+            [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+        );
+        let texture = Arc::new(checker);
+        textured.emission_texture = Some(texture.clone());
+        let mats = [mat([2.0, 3.0, 4.0]), textured];
+        let lights = Lights::new(&tris, &[0, 1], &mats, |_| None).unwrap();
+        let mut seen = Vec::new();
+        for u_sel in [0.1, 0.95] {
+            let u = Vec2::new(0.3, 0.6);
+            let ls = lights.sample_position(u_sel, u).unwrap();
+            let b = square_to_uniform_triangle(u);
+            let le = match ls.light {
+                0 => [2.0, 3.0, 4.0],
+                _ => texture.lookup(b.x, b.y),
+            };
+            assert_eq!(ls.le, le, "light {}", ls.light);
+            assert_eq!(lights.emitted_at(ls.light, 1.0, ls.p), le);
+            seen.push(ls.light);
+        }
+        assert_eq!(seen, [0, 1]);
+    }
+
+    #[test]
     fn chi2_emission_direction() {
         let tris = [[Vec3::ZERO, Vec3::X, Vec3::Y]];
         let lights = Lights::new(&tris, &[0], &[mat([1.0; 3])], |_| None).unwrap();
