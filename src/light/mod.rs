@@ -46,9 +46,6 @@ pub struct AreaLight {
     pub le: [f32; 3],
     /// Directional emission L_e(w) = 1 - a(cos theta) (see `Material::emission_table`).
     pub table: Option<Arc<AlbedoTable>>,
-    /// A texture of emitted radiance (`le` is its mean), looked up at the point's uv; boxed
-    /// so that the untextured lights next-event estimation reads stay small.
-    pub texture: Option<Box<LightTexture>>,
 }
 
 /// A textured area light's texture and its triangle's uvs at the three corners
@@ -60,10 +57,11 @@ pub struct LightTexture {
 }
 
 impl LightTexture {
-    /// The texture coordinates at barycentrics (b1, b2) (p = v0 + b1 e1 + b2 e2).
+    /// The texture's radiance at barycentrics (b1, b2) (p = v0 + b1 e1 + b2 e2).
     #[inline]
-    fn uv_at(&self, b1: f32, b2: f32) -> Vec2 {
-        self.uv[0] * (1.0 - b1 - b2) + self.uv[1] * b1 + self.uv[2] * b2
+    fn radiance_at(&self, b1: f32, b2: f32) -> [f32; 3] {
+        let uv = self.uv[0] * (1.0 - b1 - b2) + self.uv[1] * b1 + self.uv[2] * b2;
+        self.texture.lookup(uv.x, uv.y)
     }
 }
 
@@ -79,18 +77,6 @@ impl AreaLight {
         let (d20, d21) = (d.dot(self.e1), d.dot(self.e2));
         let den = d00 * d11 - d01 * d01;
         ((d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den)
-    }
-
-    /// The radiance of a textured light at barycentrics (b1, b2) (`le` without a texture).
-    #[inline]
-    fn radiance_at(&self, b1: f32, b2: f32) -> [f32; 3] {
-        match &self.texture {
-            None => self.le,
-            Some(t) => {
-                let uv = t.uv_at(b1, b2);
-                t.texture.lookup(uv.x, uv.y)
-            }
-        }
     }
 }
 
@@ -310,6 +296,10 @@ pub struct Lights {
     dist: Distribution1D,
     /// For each scene triangle, its light index or u32::MAX.
     light_of_tri: Vec<u32>,
+    /// Each area light's texture of radiance, if any; empty if no light has one, so that
+    /// the untextured scenes' light samples check this once and read lights of the size
+    /// they had without textures.
+    textures: Vec<Option<LightTexture>>,
     points: Vec<PointLight>,
     env: Option<EnvLight>,
     /// The choice among the kinds: entry 0 the area lights, 1..=points.len() the point
@@ -330,6 +320,7 @@ impl Lights {
         uv_of: impl Fn(usize) -> Option<[Vec2; 3]>,
     ) -> Result<Lights, TooBright> {
         let mut lights = Vec::new();
+        let mut textures = Vec::new();
         let mut light_of_tri = vec![u32::MAX; tris.len()];
         for (i, t) in tris.iter().enumerate() {
             let m = &materials[tri_material[i] as usize];
@@ -353,13 +344,11 @@ impl Lights {
                 area,
                 le: m.emission,
                 table: m.emission_table.clone(),
-                texture: m.emission_texture.as_ref().map(|t| {
-                    Box::new(LightTexture {
-                        texture: t.clone(),
-                        uv: uv_of(i).unwrap_or([Vec2::ZERO, Vec2::X, Vec2::Y]),
-                    })
-                }),
             });
+            textures.push(m.emission_texture.as_ref().map(|t| LightTexture {
+                texture: t.clone(),
+                uv: uv_of(i).unwrap_or([Vec2::ZERO, Vec2::X, Vec2::Y]),
+            }));
         }
         let mut power: Vec<f32> = Vec::with_capacity(lights.len());
         let mut total = 0.0f64;
@@ -380,10 +369,14 @@ impl Lights {
         if !finite_power(total) {
             return Err(TooBright::Total { power: total });
         }
+        if textures.iter().all(Option::is_none) {
+            textures = Vec::new();
+        }
         Ok(Lights {
             dist: Distribution1D::new(&power),
             lights,
             light_of_tri,
+            textures,
             points: Vec::new(),
             env: None,
             kinds: None,
@@ -528,12 +521,17 @@ impl Lights {
     /// [`Lights::emitted`] at point `p` of light `i` (a textured light's texture there).
     #[inline(never)]
     pub fn emitted_at(&self, i: u32, cos: f32, p: Vec3) -> [f32; 3] {
-        let l = &self.lights[i as usize];
-        if l.texture.is_none() {
+        let Some(t) = self.texture(i as usize) else {
             return self.emitted(i, cos);
-        }
-        let (b1, b2) = l.barycentrics(p);
-        l.radiance_at(b1, b2)
+        };
+        let (b1, b2) = self.lights[i as usize].barycentrics(p);
+        t.radiance_at(b1, b2)
+    }
+
+    /// Light `i`'s texture of radiance, if it has one.
+    #[inline]
+    fn texture(&self, i: usize) -> Option<&LightTexture> {
+        self.textures.get(i).and_then(Option::as_ref)
     }
 
     /// Light index of scene triangle `prim`, if it emits.
@@ -551,6 +549,24 @@ impl Lights {
     /// Sample a light by power, then a point uniformly on it.
     #[inline]
     pub fn sample_position(&self, u_sel: f32, u: Vec2) -> Option<LightSample> {
+        if self.textures.is_empty() {
+            self.sample_position_of::<false>(u_sel, u)
+        } else {
+            self.sample_position_textured(u_sel, u)
+        }
+    }
+
+    /// [`Lights::sample_position`] in a scene with a textured light (out of line, so that
+    /// the texture's lookup and its call leave the untextured scenes' code as it was).
+    #[cold]
+    #[inline(never)]
+    fn sample_position_textured(&self, u_sel: f32, u: Vec2) -> Option<LightSample> {
+        self.sample_position_of::<true>(u_sel, u)
+    }
+
+    /// [`Lights::sample_position`], reading the lights' textures if `TEXTURED`.
+    #[inline(always)]
+    fn sample_position_of<const TEXTURED: bool>(&self, u_sel: f32, u: Vec2) -> Option<LightSample> {
         if self.lights.is_empty() {
             return None;
         }
@@ -561,7 +577,10 @@ impl Lights {
         Some(LightSample {
             p,
             n: l.n,
-            le: l.radiance_at(b.x, b.y),
+            le: match self.texture(i) {
+                Some(t) if TEXTURED => t.radiance_at(b.x, b.y),
+                _ => l.le,
+            },
             directional: l.table.is_some(),
             pdf_area: pmf * self.p_area / l.area,
             light: i as u32,
@@ -654,6 +673,44 @@ mod tests {
         );
         assert_chi2("light sampling", &r);
         assert!((r.pdf_integral - 1.0).abs() < 5e-3, "{}", r.pdf_integral);
+    }
+
+    #[test]
+    fn untextured_lights_sample_without_textures() {
+        // An area light is as large as before textured emission (its texture is kept
+        // beside it): light sampling reads no more memory per light.
+        assert!(std::mem::size_of::<AreaLight>() <= 80);
+        let tris = [
+            [Vec3::ZERO, Vec3::X, Vec3::Y],
+            [Vec3::Z, Vec3::Z + Vec3::X, Vec3::Z + Vec3::Y],
+        ];
+        let plain = Lights::new(&tris, &[0, 0], &[mat([1.0; 3])], |_| None).unwrap();
+        assert!(plain.textures.is_empty());
+        // One textured light among untextured ones: each light's own radiance.
+        let mut textured = mat([0.5; 3]);
+        let checker = crate::texture::Texture::checkerboard(
+            [0.0; 3],
+            [1.0; 3],
+            [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+        );
+        let texture = Arc::new(checker);
+        textured.emission_texture = Some(texture.clone());
+        let mats = [mat([2.0, 3.0, 4.0]), textured];
+        let lights = Lights::new(&tris, &[0, 1], &mats, |_| None).unwrap();
+        let mut seen = Vec::new();
+        for u_sel in [0.1, 0.95] {
+            let u = Vec2::new(0.3, 0.6);
+            let ls = lights.sample_position(u_sel, u).unwrap();
+            let b = square_to_uniform_triangle(u);
+            let le = match ls.light {
+                0 => [2.0, 3.0, 4.0],
+                _ => texture.lookup(b.x, b.y),
+            };
+            assert_eq!(ls.le, le, "light {}", ls.light);
+            assert_eq!(lights.emitted_at(ls.light, 1.0, ls.p), le);
+            seen.push(ls.light);
+        }
+        assert_eq!(seen, [0, 1]);
     }
 
     #[test]
