@@ -184,8 +184,8 @@ pub struct RwStats {
     /// Standard error of the image mean's luminance the correction adds (its noise).
     pub correction_se: f64,
     pub pilot_seconds: f64,
-    /// The gather's depth, and why (`rw_depth`; empty when it was named or not chosen),
-    /// with the seconds its pilot took.
+    /// The gather's depth (0: no gather), and why (`rw_depth`; empty when it was named or
+    /// not chosen), with the seconds its pilot took.
     pub gather_depth: u32,
     pub gather_depth_choice: String,
     pub gather_depth_seconds: f64,
@@ -381,14 +381,20 @@ pub fn render_rw(
         _ => None,
     };
     if let Some(c) = &depth_choice {
-        chosen.set.gather_depth = Some(c.depth);
+        match c.depth {
+            rw_depth::NO_GATHER => chosen.set.gather = Gather::Off,
+            d => chosen.set.gather_depth = Some(d),
+        }
         progress.message(&c.line);
     }
     let integrator = &chosen;
-    let gather_depth = integrator
-        .set
-        .gather_depth
-        .unwrap_or(crate::integrator::gather::DEFAULT_GATHER_DEPTH);
+    let gather_depth = match integrator.set.gather.reads_solution() {
+        true => integrator
+            .set
+            .gather_depth
+            .unwrap_or(crate::integrator::gather::DEFAULT_GATHER_DEPTH),
+        false => rw_depth::NO_GATHER,
+    };
 
     // 1. The pilot: same camera and estimator at PILOT_RES^2, stream 1.
     let t_pilot = Instant::now();

@@ -33,18 +33,25 @@
 //! and the depth with the least E_d renders. Left out of the model: the energy-preserving
 //! filter (it lowers every depth's noise alike) and the bias correction (`rw_bias`, which
 //! removes the part of e common to a 9x9 box); both make E_d's bias term an upper bound.
+//!
+//! One more candidate is no gather at all (`NO_GATHER`: every bounce traced, the trials and
+//! the filter as before): no bias, so E = s^2 / N. As the budget grows every depth's E_d
+//! falls to its e^2 and this one to 0, so past some budget it is chosen: the method's
+//! error keeps falling as path tracing's does, with no floor set by the solution.
 
 use super::render::{render_pass_split, Counts, Pass};
 use super::RenderSettings;
 use crate::film::Film;
 use crate::integrator::gather::DEFAULT_GATHER_DEPTH;
-use crate::integrator::Integrator;
+use crate::integrator::{Gather, Integrator};
 use crate::progress::Progress;
 use crate::scene::Scene;
 use std::time::Instant;
 
-/// The depths the pilot compares.
-pub const CANDIDATES: [u32; 3] = [1, 2, 3];
+/// The candidate that gathers nothing: every bounce traced (`--gather off`).
+pub const NO_GATHER: u32 = 0;
+/// The depths the pilot compares, and no gather.
+pub const CANDIDATES: [u32; 4] = [1, 2, 3, NO_GATHER];
 /// Side of the square pilot image.
 pub const PILOT_SIDE: u32 = 32;
 /// Trials per pixel in each of the pilot's two halves.
@@ -178,14 +185,19 @@ pub fn choose(
     let mut pset = *set;
     pset.width = PILOT_SIDE;
     pset.height = PILOT_SIDE;
-    let integrators: Vec<[Integrator; 2]> = CANDIDATES
+    // per candidate: with the solution and with the coarse one (no gather: traced alone)
+    let integrators: Vec<Vec<Integrator>> = CANDIDATES
         .iter()
         .map(|&depth| {
             let mut with_fine = integrator.clone();
+            if depth == NO_GATHER {
+                with_fine.set.gather = Gather::Off;
+                return vec![with_fine];
+            }
             with_fine.set.gather_depth = Some(depth);
             let mut with_coarse = with_fine.clone();
             with_coarse.radiosity = Some(coarse.clone());
-            [with_fine, with_coarse]
+            vec![with_fine, with_coarse]
         })
         .collect();
     // Rounds of the pilot until its share of the budget is spent (at least one).
@@ -227,8 +239,8 @@ pub fn choose(
         .iter()
         .map(|e| {
             format!(
-                "depth {} {:.2e} = noise {:.2e} at {:.0} trials + error {:.2e}",
-                e.depth,
+                "{} {:.2e} = noise {:.2e} at {:.0} trials + error {:.2e}",
+                name(e.depth),
                 e.predicted_mse(budget).sqrt(),
                 (e.variance / e.trials(budget)).sqrt(),
                 e.trials(budget),
@@ -237,9 +249,12 @@ pub fn choose(
         })
         .collect();
     let line = format!(
-        "gather depth {}: the least predicted RMSE ({}; the solution's error from its {} \
-         elements against the coarse {})",
-        best.depth,
+        "{}: the least predicted RMSE ({}; the solution's error from its {} elements against \
+         the coarse {})",
+        match best.depth {
+            NO_GATHER => "no gather".to_string(),
+            d => format!("gather depth {d}"),
+        },
         each.join(", "),
         fine.stats.elements,
         coarse.stats.elements,
@@ -252,12 +267,20 @@ pub fn choose(
     }))
 }
 
+/// A candidate's name in the choice's line.
+fn name(depth: u32) -> String {
+    match depth {
+        NO_GATHER => "no gather".into(),
+        d => format!("depth {d}"),
+    }
+}
+
 /// One round of the pilot for one depth: two halves (their own streams), each rendered with
-/// the solution and with the coarse one from the same random numbers.
+/// the solution and with the coarse one from the same random numbers (no gather: once).
 #[allow(clippy::too_many_arguments)]
 fn pilot_round(
     scene: &Scene,
-    integ: &[Integrator; 2],
+    integ: &[Integrator],
     pset: &RenderSettings,
     depth: u32,
     round: u32,
@@ -302,9 +325,14 @@ fn budget_seconds(e: &DepthEstimate, budget: TrialBudget) -> f64 {
     }
 }
 
-/// One depth's figures from its four films: (fine, coarse) of half a, then of half b.
+/// One depth's figures from its four films: (fine, coarse) of half a, then of half b; or
+/// from two, half a and half b, for a candidate without a solution's error (`NO_GATHER`).
 fn estimate_of(depth: u32, films: &[Film], scale: f64, seconds: f64, rays: u64) -> DepthEstimate {
-    let (fa, ca, fb, cb) = (&films[0], &films[1], &films[2], &films[3]);
+    let (fa, ca, fb, cb) = match films {
+        [a, b] => (a, a, b, b),
+        [fa, ca, fb, cb] => (fa, ca, fb, cb),
+        _ => unreachable!("two or four films"),
+    };
     let n = fa.pixels.len().max(1) as f64 * 3.0;
     let (mut variance, mut error2) = (0.0, 0.0);
     for i in 0..fa.pixels.len() {
@@ -420,15 +448,47 @@ mod tests {
         .unwrap()
         .unwrap();
         let e = &choice.estimates;
-        assert_eq!(e.len(), 3);
+        assert_eq!(e.len(), 4);
         assert!(e[0].error2 > 0.0, "{e:?}");
         assert!(e[1].error2 < e[0].error2, "{e:?}");
         assert!(e[1].variance > e[0].variance, "{e:?}");
-        assert!(choice.line.starts_with("gather depth "), "{}", choice.line);
-        assert_ne!(
-            choice.depth, 1,
-            "at a million trials the error decides: {}",
-            choice.line
-        );
+        // tracing every bounce: no error, the most noise
+        assert_eq!((e[3].depth, e[3].error2), (NO_GATHER, 0.0), "{e:?}");
+        assert!(e[3].variance > e[0].variance, "{e:?}");
+        // at a million trials the error decides, and only tracing every bounce has none
+        assert_eq!(choice.depth, NO_GATHER, "{}", choice.line);
+        assert!(choice.line.starts_with("no gather: "), "{}", choice.line);
+        // at 64 trials the noise decides: a gather
+        let small = TrialBudget::PerPixel {
+            trials: 64.0,
+            pixels: 32.0 * 32.0,
+        };
+        assert_ne!(least(e, small).unwrap().depth, NO_GATHER, "{e:?}");
+    }
+
+    /// No floor: whatever the depths' errors, past some budget the candidate without a
+    /// gather (no error) is chosen, however noisy.
+    #[test]
+    fn past_some_budget_no_gather_is_chosen() {
+        let d = [
+            est(1, 1.0, 1e-6, 1e-6),
+            est(2, 2.0, 1.5e-6, 1e-8),
+            est(NO_GATHER, 50.0, 3e-6, 0.0),
+        ];
+        let at = |n: f64| {
+            least(
+                &d,
+                TrialBudget::PerPixel {
+                    trials: n,
+                    pixels: 1.0,
+                },
+            )
+            .unwrap()
+            .depth
+        };
+        assert_eq!(at(1e3), 1);
+        // E_2 = 2/n + 1e-8 against E_none = 50/n: equal at n = 4.8e9
+        assert_eq!(at(1e9), 2);
+        assert_eq!(at(1e11), NO_GATHER);
     }
 }
