@@ -709,6 +709,12 @@ mod tests {
             } else {
                 dir.join(&ex.scene).display().to_string()
             };
+            // a public scene a fetch script writes (scenes/*/public/, not committed)
+            // is checked where it has been fetched
+            if ex.scene.contains("/public/") && !Path::new(&spec).exists() {
+                eprintln!("{}: {} not fetched, not checked", p.display(), ex.scene);
+                continue;
+            }
             let res = crate::scene::load_desc(&spec).unwrap().defaults.res;
             let name = p.display().to_string();
             let plan = validate(&ex, &name, &spec, res).unwrap_or_else(|e| panic!("{e}"));

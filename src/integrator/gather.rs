@@ -162,47 +162,18 @@ pub fn radiance<const N: usize>(
     l_tilde: &LTilde<N>,
     c: &mut Counters,
 ) -> Spectrum<N> {
+    // (the light seen directly is not asked for here)
     let mut seen = Spectrum::ZERO;
+    let mut one = |s: &mut SampleStream, cv: bool, c: &mut Counters| {
+        estimate(scene, sol, ray, s, set, gather_depth, l_tilde, cv, &mut seen, c)
+    };
     if set.gather != Gather::Correction {
-        return estimate(
-            scene,
-            sol,
-            ray,
-            s,
-            set,
-            gather_depth,
-            l_tilde,
-            false,
-            &mut seen,
-            c,
-        );
+        return one(s, false, c);
     }
     let mut s_lookup = *s;
-    let lookup = estimate(
-        scene,
-        sol,
-        ray,
-        &mut s_lookup,
-        set,
-        gather_depth,
-        l_tilde,
-        false,
-        &mut seen,
-        c,
-    );
+    let lookup = one(&mut s_lookup, false, c);
     c.paths -= 1;
-    estimate(
-        scene,
-        sol,
-        ray,
-        s,
-        set,
-        gather_depth,
-        l_tilde,
-        true,
-        &mut seen,
-        c,
-    ) - lookup
+    one(s, true, c) - lookup
 }
 
 /// One sample of the lookup and, from the same path, the light it sees directly: the

@@ -368,22 +368,21 @@ mod tests {
         }
     }
 
+    /// The candidate chosen at n trials per pixel.
+    fn chosen_at(d: &[DepthEstimate], n: f64) -> u32 {
+        let b = TrialBudget::PerPixel {
+            trials: n,
+            pixels: 1.0,
+        };
+        least(d, b).unwrap().depth
+    }
+
     /// Noise wins at small budgets, the solution's error at large ones: a shallow gather
     /// (little noise, more error) first, a deeper one (more noise and cost, less error) later.
     #[test]
     fn the_depth_moves_with_the_budget() {
         let d = [est(1, 1.0, 1e-6, 1e-4), est(2, 3.0, 1.5e-6, 1e-5)];
-        let at = |n: f64| {
-            least(
-                &d,
-                TrialBudget::PerPixel {
-                    trials: n,
-                    pixels: 1.0,
-                },
-            )
-            .unwrap()
-            .depth
-        };
+        let at = |n: f64| chosen_at(&d, n);
         // E_1 = 1/n + 1e-4, E_2 = 3/n + 1e-5: equal at n = 2 / 9e-5 ~ 22,222
         assert_eq!(at(1_000.0), 1);
         assert_eq!(at(100_000.0), 2);
@@ -475,17 +474,7 @@ mod tests {
             est(2, 2.0, 1.5e-6, 1e-8),
             est(NO_GATHER, 50.0, 3e-6, 0.0),
         ];
-        let at = |n: f64| {
-            least(
-                &d,
-                TrialBudget::PerPixel {
-                    trials: n,
-                    pixels: 1.0,
-                },
-            )
-            .unwrap()
-            .depth
-        };
+        let at = |n: f64| chosen_at(&d, n);
         assert_eq!(at(1e3), 1);
         // E_2 = 2/n + 1e-8 against E_none = 50/n: equal at n = 4.8e9
         assert_eq!(at(1e9), 2);
