@@ -125,9 +125,9 @@ impl<const N: usize> LTilde<'_, N> {
     pub fn at_hit(&self, hit: &SurfaceHit, front: bool) -> Spectrum<N> {
         match self {
             LTilde::Scene(l) => *l,
-            LTilde::Radiosity(sol, l) => {
-                sol.indirect_at::<N>(hit.prim, hit.b1, hit.b2, front).unwrap_or(*l)
-            }
+            LTilde::Radiosity(sol, l) => sol
+                .indirect_at::<N>(hit.prim, hit.b1, hit.b2, front)
+                .unwrap_or(*l),
         }
     }
 }

@@ -602,7 +602,8 @@ impl Solution {
                         0.0
                     };
                     let ind = (sh.b[q + k] - e - sh.direct[q + k]).max(0.0);
-                    element_indirect[q + k] = ((ind / r + ambient[k]) / std::f64::consts::PI) as f32;
+                    element_indirect[q + k] =
+                        ((ind / r + ambient[k]) / std::f64::consts::PI) as f32;
                 }
             }
         }
@@ -616,7 +617,13 @@ impl Solution {
         }
         let mean_indirect: Vec<f32> = mean_indirect
             .iter()
-            .map(|&m| if area_sum > 0.0 { (m / area_sum) as f32 } else { 0.0 })
+            .map(|&m| {
+                if area_sum > 0.0 {
+                    (m / area_sum) as f32
+                } else {
+                    0.0
+                }
+            })
             .collect();
         let stats = RadiosityStats {
             elements: ne as u64,

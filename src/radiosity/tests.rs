@@ -429,7 +429,12 @@ fn roulette_cell_is_the_located_element() {
             }
         }
         // rounding just outside the triangle stays in it
-        for (b1, b2) in [(-1e-6, 0.5), (0.5, -1e-6), (0.5 + 1e-6, 0.5), (1.0 + 1e-6, 0.0)] {
+        for (b1, b2) in [
+            (-1e-6, 0.5),
+            (0.5, -1e-6),
+            (0.5 + 1e-6, 0.5),
+            (1.0 + 1e-6, 0.0),
+        ] {
             assert_eq!(mesh::cell_of(level, b1, b2), mesh::locate(level, b1, b2).0);
         }
     }
@@ -476,8 +481,15 @@ fn roulette_solution_stops_early_with_an_ambient_term() {
     // by the area-weighted albedo; the furnace's saturated walls reflect it unevenly),
     // without the ambient term over 25% below
     for k in 0..3 {
-        let (m, e, f) = (early.mean_indirect[k], bare.mean_indirect[k], full.mean_indirect[k]);
-        assert!((m - f).abs() < 0.08 * f && e < 0.75 * f, "band {k}: {m} {e} {f}");
+        let (m, e, f) = (
+            early.mean_indirect[k],
+            bare.mean_indirect[k],
+            full.mean_indirect[k],
+        );
+        assert!(
+            (m - f).abs() < 0.08 * f && e < 0.75 * f,
+            "band {k}: {m} {e} {f}"
+        );
     }
 }
 
