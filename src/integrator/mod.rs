@@ -223,16 +223,15 @@ impl Integrator {
                 ));
             }
         }
-        let estimate = set
-            .roulette
-            .mode
-            .uses_estimate()
+        // (the radiosity L~ falls back on the solution's mean, not on the scene's photon walk)
+        let estimate = (set.roulette.mode.uses_estimate() && !reads_radiosity_l_tilde)
             .then(|| RadianceEstimate::of_scene(scene));
         let gathers = set.gather.reads_solution() || set.kind == IntegratorKind::Radiosity;
         let radiosity = if gathers || reads_radiosity_l_tilde {
             let mut rset = set.radiosity;
             if !gathers {
                 rset.default_elements = crate::radiosity::ROULETTE_ELEMENTS;
+                rset.roulette_only = true;
             }
             Some(Arc::new(Solution::compute(scene, &rset, bands, progress)?))
         } else {
@@ -308,7 +307,7 @@ impl Integrator {
             None => crate::spectrum::Spectrum::ZERO,
         };
         match (&self.radiosity, self.set.roulette.estimate) {
-            (Some(sol), RrEstimate::Radiosity) => LTilde::Radiosity(sol, scene_l),
+            (Some(sol), RrEstimate::Radiosity) => LTilde::Radiosity(sol, sol.mean_indirect()),
             _ => LTilde::Scene(scene_l),
         }
     }

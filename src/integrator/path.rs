@@ -311,7 +311,7 @@ impl<const N: usize> PathState<N> {
         // Roulette and continuation (integrator/rr.rs).
         let step = sel.sample::<N>(&bsdf, wo_l, u_lobe, u_bsdf, u_rr);
         let terminated = matches!(step, Step::Terminated);
-        let lt = || l_tilde.at(hit.prim, hit.p, wo.dot(hit.ng) > 0.0);
+        let lt = || l_tilde.at_hit(&hit, wo.dot(hit.ng) > 0.0);
         self.est = rr.estimate_term(&sel, &bsdf, terminated, &beta, lt);
         let next = continuation(hit.p, ng, &frame, step, &beta);
         self.continue_with(match term {

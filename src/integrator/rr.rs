@@ -38,6 +38,7 @@
 
 use crate::material::{Bsdf, BsdfSample, Lobe};
 use crate::radiosity::Solution;
+use crate::scene::SurfaceHit;
 use crate::spectrum::Spectrum;
 use glam::{Vec2, Vec3};
 
@@ -115,6 +116,18 @@ impl<const N: usize> LTilde<'_, N> {
         match self {
             LTilde::Scene(l) => *l,
             LTilde::Radiosity(sol, l) => sol.indirect_incident::<N>(prim, p, front).unwrap_or(*l),
+        }
+    }
+
+    /// L~ at `hit`, reached on its `front` side or not: for the radiosity solution, its
+    /// element found from the hit's own barycentrics (no projection, no search).
+    #[inline]
+    pub fn at_hit(&self, hit: &SurfaceHit, front: bool) -> Spectrum<N> {
+        match self {
+            LTilde::Scene(l) => *l,
+            LTilde::Radiosity(sol, l) => sol
+                .indirect_at::<N>(hit.prim, hit.b1, hit.b2, front)
+                .unwrap_or(*l),
         }
     }
 }

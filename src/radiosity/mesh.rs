@@ -216,6 +216,22 @@ pub fn locate(level: u32, b1: f32, b2: f32) -> (u32, [(u32, u32, f32); 3]) {
     }
 }
 
+/// The element (relative to the triangle's first) of the point with barycentrics (b1,
+/// b2) of a triangle meshed at `level`, as `locate` finds it but without its corners'
+/// weights, and by truncation (the coordinates are clamped non-negative) rather than
+/// a call of `floor`: the roulette's lookup at every rouletted vertex.
+#[inline]
+pub fn cell_of(level: u32, b1: f32, b2: f32) -> u32 {
+    let n = 1u32 << level;
+    let nf = n as f32;
+    let x = (b1 * nf).clamp(0.0, nf);
+    let y = (b2 * nf).clamp(0.0, nf);
+    let j = (y as u32).min(n - 1);
+    let i = (x as u32).min(n - 1 - j);
+    let (fx, fy) = (x - i as f32, y - j as f32);
+    cell_index(n, i, j, fx + fy > 1.0 && i + j + 1 < n)
+}
+
 /// Barycentrics (b1, b2) of `p` in the triangle v0 + b1 e1 + b2 e2 (p projected on its plane).
 #[inline]
 pub fn barycentrics(v0: Vec3, e1: Vec3, e2: Vec3, p: Vec3) -> (f32, f32) {

@@ -411,3 +411,106 @@ fn glossy_furnace_solution_is_one_everywhere() {
     println!("glossy furnace: worst |L - 1| = {worst:.2e}");
     assert!(worst < 0.005, "worst deviation {worst}");
 }
+
+/// The roulette's lookup finds, from a hit's barycentrics, the element `locate` finds
+/// for the same point, on every level, inside the cells and on their edges and corners.
+#[test]
+fn roulette_cell_is_the_located_element() {
+    for level in 0..6 {
+        let k = 48;
+        for a in 0..=k {
+            for b in 0..=(k - a) {
+                let (b1, b2) = (a as f32 / k as f32, b as f32 / k as f32);
+                assert_eq!(
+                    mesh::cell_of(level, b1, b2),
+                    mesh::locate(level, b1, b2).0,
+                    "level {level}, barycentrics ({b1}, {b2})"
+                );
+            }
+        }
+        // rounding just outside the triangle stays in it
+        for (b1, b2) in [
+            (-1e-6, 0.5),
+            (0.5, -1e-6),
+            (0.5 + 1e-6, 0.5),
+            (1.0 + 1e-6, 0.0),
+        ] {
+            assert_eq!(mesh::cell_of(level, b1, b2), mesh::locate(level, b1, b2).0);
+        }
+    }
+}
+
+/// The furnace (walls of albedo a emitting 1 - a: radiance 1 everywhere). A solution
+/// that only the roulette reads may stop after a few shots (here 200 of 1,246); with the unshot power spread as
+/// the ambient term its L~ (indirect radiance arriving) is close to the converged
+/// solve's in the mean, without it far below.
+#[test]
+fn roulette_solution_stops_early_with_an_ambient_term() {
+    let scene = crate::scene::load("furnace").unwrap();
+    let solve = |roulette_only: bool, max_shots: Option<u64>| {
+        let set = RadiositySettings {
+            max_area: Some(2.0 / 16.0),
+            roulette_only,
+            max_shots,
+            ..Default::default()
+        };
+        Solution::compute(&scene, &set, 3, &crate::progress::Silent).unwrap()
+    };
+    let early = solve(true, Some(200));
+    let full = solve(false, None);
+    println!(
+        "{} of {} shots, mean L~ {:?} (converged {:?})",
+        early.stats.shots, full.stats.shots, early.mean_indirect, full.mean_indirect
+    );
+    assert!(early.stats.shots < full.stats.shots / 4 && !early.stats.converged);
+    assert!(full.stats.converged);
+    // the worst difference from the converged L~, front sides (the furnace's inside)
+    let worst = |sol: &Solution| {
+        (0..sol.mesh.elems.len() * 3)
+            .map(|q| {
+                let (i, k) = (q / 3, q % 3);
+                (sol.element_indirect[2 * i * 3 + k] - full.element_indirect[2 * i * 3 + k]).abs()
+            })
+            .fold(0.0f32, f32::max)
+    };
+    let bare = solve(false, Some(early.stats.shots));
+    let (we, wb) = (worst(&early), worst(&bare));
+    println!("worst |L~ - converged|: early {we:.3e}, without the ambient term {wb:.3e}");
+    assert!(we < 0.5 * wb, "{we} {wb}");
+    // the mean within 8% of the converged one (the ambient term spreads the unshot power
+    // by the area-weighted albedo; the furnace's saturated walls reflect it unevenly),
+    // without the ambient term over 25% below
+    for k in 0..3 {
+        let (m, e, f) = (
+            early.mean_indirect[k],
+            bare.mean_indirect[k],
+            full.mean_indirect[k],
+        );
+        assert!(
+            (m - f).abs() < 0.08 * f && e < 0.75 * f,
+            "band {k}: {m} {e} {f}"
+        );
+    }
+}
+
+/// A solution that only the roulette reads stops at `ROULETTE_RAYS` shadow rays on a
+/// scene whose solve would cast far more (rw-room: 2,354 elements, 18.9M rays to the
+/// tolerance), and converges where the budget allows (the Cornell box's 210 elements).
+#[test]
+fn roulette_solution_stops_at_its_ray_budget() {
+    let solve = |name: &str| {
+        let scene = crate::scene::load(name).unwrap();
+        let set = RadiositySettings {
+            default_elements: super::ROULETTE_ELEMENTS,
+            roulette_only: true,
+            ..Default::default()
+        };
+        Solution::compute(&scene, &set, 3, &crate::progress::Silent).unwrap()
+    };
+    let room = solve("rw-room");
+    println!("rw-room: {:?}", room.stats);
+    assert!(!room.stats.converged);
+    assert!((super::ROULETTE_RAYS..2 * super::ROULETTE_RAYS).contains(&room.stats.rays));
+    let cornell = solve("cornell");
+    assert!(cornell.stats.converged && cornell.stats.rays < super::ROULETTE_RAYS);
+}
