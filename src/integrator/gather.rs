@@ -165,7 +165,18 @@ pub fn radiance<const N: usize>(
     // (the light seen directly is not asked for here)
     let mut seen = Spectrum::ZERO;
     let mut one = |s: &mut SampleStream, cv: bool, c: &mut Counters| {
-        estimate(scene, sol, ray, s, set, gather_depth, l_tilde, cv, &mut seen, c)
+        estimate(
+            scene,
+            sol,
+            ray,
+            s,
+            set,
+            gather_depth,
+            l_tilde,
+            cv,
+            &mut seen,
+            c,
+        )
     };
     if set.gather != Gather::Correction {
         return one(s, false, c);
