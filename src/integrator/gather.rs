@@ -350,7 +350,7 @@ fn estimate<const N: usize>(
 
         let step = sel.sample::<N>(&bsdf, wo_l, u_lobe, u_bsdf, u_rr);
         let terminated = matches!(step, Step::Terminated);
-        let lt = || l_tilde.at(hit.prim, hit.p, front);
+        let lt = || l_tilde.at_hit(&hit, front);
         if let Some(e) = rr.estimate_term(&sel, &bsdf, terminated, &f_total, lt) {
             l += e;
         }

@@ -110,15 +110,6 @@ pub enum LTilde<'a, const N: usize> {
 }
 
 impl<const N: usize> LTilde<'_, N> {
-    /// L~ at point `p` of triangle `prim`, reached on its `front` side or not.
-    #[inline]
-    pub fn at(&self, prim: u32, p: Vec3, front: bool) -> Spectrum<N> {
-        match self {
-            LTilde::Scene(l) => *l,
-            LTilde::Radiosity(sol, l) => sol.indirect_incident::<N>(prim, p, front).unwrap_or(*l),
-        }
-    }
-
     /// L~ at `hit`, reached on its `front` side or not: for the radiosity solution, its
     /// element found from the hit's own barycentrics (no projection, no search).
     #[inline]

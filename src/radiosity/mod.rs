@@ -722,24 +722,6 @@ impl Solution {
         Some(Spectrum(s).map(|v| v.max(0.0) * std::f32::consts::FRAC_1_PI))
     }
 
-    /// The mean indirect radiance arriving at point `p` of triangle `prim` on side
-    /// `front` (its element's, per band): the roulette's L~. None if not meshed.
-    #[inline]
-    pub fn indirect_incident<const N: usize>(
-        &self,
-        prim: u32,
-        p: Vec3,
-        front: bool,
-    ) -> Option<Spectrum<N>> {
-        debug_assert_eq!(N, self.bands);
-        let (tm, cell, _) = self.locate(prim, p)?;
-        let side = if front { 0 } else { 1 };
-        let q = (2 * (tm.first_elem + cell) as usize + side) * N;
-        let mut s = [0.0f32; N];
-        s.copy_from_slice(&self.element_indirect[q..q + N]);
-        Some(Spectrum(s))
-    }
-
     /// The roulette's L~ at the point of triangle `prim` with barycentrics (`b1`, `b2`)
     /// (the hit's, the mesh's own parametrisation: no projection) on side `front`: its
     /// element's mean indirect radiance arriving. None if the triangle is not meshed.
