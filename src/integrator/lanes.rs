@@ -86,10 +86,12 @@ pub struct Lanes<const N: usize> {
     goes_on: [bool; L],
 }
 
-/// What a finished lane gives its path: the shadow ray with its t_max and estimate, and
-/// the next segment with its throughput and density.
+/// What a finished lane gives its path: whether it has a shadow ray, the shadow ray with
+/// its t_max and estimate (whether or not it has one), and the next segment with its
+/// throughput and density.
 pub type Ending<const N: usize> = (
-    Option<(Ray, f32, Spectrum<N>)>,
+    bool,
+    (Ray, f32, Spectrum<N>),
     Option<(Ray, Spectrum<N>, f32, bool)>,
 );
 
@@ -290,7 +292,8 @@ impl<const N: usize> Lanes<N> {
             beta.0[b] = self.beta_next[b][i];
         }
         (
-            self.has_shadow[i].then(|| (ray(0), SHADOW_T_MAX, e)),
+            self.has_shadow[i],
+            (ray(0), SHADOW_T_MAX, e),
             // Lambertian samples are never Dirac.
             self.goes_on[i].then(|| (ray(6), beta, o(12), false)),
         )
