@@ -547,7 +547,7 @@ impl Lights {
     }
 
     /// Sample a light by power, then a point uniformly on it.
-    #[inline]
+    #[inline(always)]
     pub fn sample_position(&self, u_sel: f32, u: Vec2) -> Option<LightSample> {
         if self.textures.is_empty() {
             self.sample_position_of::<false>(u_sel, u)
