@@ -109,7 +109,14 @@ pub struct Distribution1D {
     /// Probability of each entry.
     pmf: Vec<f32>,
     total: f64,
+    /// cdf[1..] of a distribution of up to [`SMALL`] entries, the rest NaN (which no u
+    /// passes), for `index_of` to count at once.
+    head: [f32; SMALL],
 }
+
+/// Entries up to which `Distribution1D::index_of` counts the cdf values at or below u in
+/// one vector comparison instead of bisecting.
+const SMALL: usize = 8;
 
 impl Distribution1D {
     /// From non-negative weights; all-zero weights give an empty distribution.
@@ -120,6 +127,7 @@ impl Distribution1D {
                 cdf: vec![0.0],
                 pmf: vec![0.0; weights.len()],
                 total: 0.0,
+                head: [f32::NAN; SMALL],
             };
         }
         let mut cdf = Vec::with_capacity(weights.len() + 1);
@@ -133,7 +141,16 @@ impl Distribution1D {
             pmf.push((w / total) as f32);
         }
         *cdf.last_mut().unwrap() = 1.0;
-        Distribution1D { cdf, pmf, total }
+        let mut head = [f32::NAN; SMALL];
+        if weights.len() <= SMALL {
+            head[..weights.len()].copy_from_slice(&cdf[1..]);
+        }
+        Distribution1D {
+            cdf,
+            pmf,
+            total,
+            head,
+        }
     }
     pub fn is_empty(&self) -> bool {
         self.total == 0.0
@@ -163,14 +180,20 @@ impl Distribution1D {
     }
 
     /// The first index i with cdf[i+1] > u (n if none): the number of entries whose
-    /// cdf[i+1] <= u, as the cdf does not decrease. A bisection whose steps depend on n
-    /// alone, each choosing its half by a conditional move: with u random, a branch per
-    /// step was mispredicted about every other time (a light sample of the furnished
-    /// room's eight ceiling triangles was 4.6% of its render time, most of it there).
+    /// cdf[i+1] <= u, as the cdf does not decrease. Up to [`SMALL`] entries that number
+    /// is counted in one vector comparison; past it, a bisection whose steps depend on n
+    /// alone, each choosing its half by a conditional move. (With u random, the
+    /// bisection's branch per step was mispredicted about every other time: a light
+    /// sample of the furnished room's eight ceiling triangles was 4.6% of its render
+    /// time, most of it there.)
     #[inline(always)]
     fn index_of(&self, u: f32) -> usize {
+        let n = self.pmf.len();
+        if n <= SMALL {
+            return self.head.iter().map(|&c| (c <= u) as usize).sum();
+        }
         let upper = &self.cdf[1..];
-        let (mut base, mut size) = (0, self.pmf.len());
+        let (mut base, mut size) = (0, n);
         while size > 1 {
             let half = size / 2;
             let mid = base + half;
@@ -221,8 +244,8 @@ mod tests {
 
     /// The bisection without branches finds the index of the one with them (the first
     /// i with cdf[i+1] > u, the index `sample` took until 2026-12-06), over sizes 1 to
-    /// 40, with zero weights (repeated cdf values) and at the cdf's own values, 0,
-    /// 1 - eps, 1, NaN and below 0.
+    /// 40 (counted up to 8, bisected past), with zero weights (repeated cdf values) and
+    /// at the cdf's own values, 0, 1 - eps, 1, infinity, NaN and below 0.
     #[test]
     fn the_index_is_the_first_past_u() {
         let mut rng = crate::sampling::SeqRng::new(7);
@@ -250,7 +273,8 @@ mod tests {
                 lo
             };
             let mut us: Vec<f32> = d.cdf.clone();
-            us.extend([0.0, super::super::rng::ONE_MINUS_EPS, 1.0, f32::NAN, -1.0]);
+            let ends = [0.0, super::super::rng::ONE_MINUS_EPS, 1.0, f32::INFINITY];
+            us.extend(ends.into_iter().chain([f32::NAN, -1.0]));
             us.extend((0..200).map(|_| rng.next_f32()));
             for u in us {
                 assert_eq!(d.index_of(u), want(u), "{n} entries, u {u}");
