@@ -13,7 +13,11 @@ import drjit as dr
 import mitsuba as mi
 
 obj = sys.argv[1]
-mi.set_variant(sys.argv[2] if len(sys.argv) > 2 else "llvm_ad_rgb")
+variant = sys.argv[2] if len(sys.argv) > 2 else "llvm_ad_rgb"
+if not variant.startswith("llvm"):
+    # A scalar variant traces one ray per call: a wavefront of RAYS rays is an LLVM one.
+    sys.exit(f"mitsuba_trace.py: VARIANT must be an LLVM one (llvm_ad_rgb, llvm_rgb), not {variant!r}")
+mi.set_variant(variant)
 n = int(sys.argv[3]) if len(sys.argv) > 3 else 1 << 20
 if len(sys.argv) > 4:
     dr.set_thread_count(int(sys.argv[4]))
